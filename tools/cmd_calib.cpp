@@ -1,0 +1,86 @@
+// `naneye calib info FILE... [--json]`: what a calibration says, and how far it can be trusted.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/domain_report.hpp"
+
+namespace naneye::tools {
+namespace {
+
+nlohmann::json camera_json(const recon::CameraModel& cam) {
+  const recon::DomainReport d = recon::analyze_domain(cam);
+  const auto& K = cam.K();
+  const auto& D = cam.distortion();
+  nlohmann::json j;
+  j["K"] = {{K(0, 0), K(0, 1), K(0, 2)}, {K(1, 0), K(1, 1), K(1, 2)}, {K(2, 0), K(2, 1), K(2, 2)}};
+  j["D"] = {D.k1, D.k2, D.p1, D.p2, D.k3};
+  j["fold_radius_px"] = d.fold_radius_px ? nlohmann::json(*d.fold_radius_px) : nlohmann::json(nullptr);
+  j["valid_pixel_share"] = d.valid_share();
+  j["max_roundtrip_error_px"] = d.max_roundtrip_error_px;
+  j["max_undistort_iterations"] = d.max_iterations;
+  return j;
+}
+
+void print_text(const nlohmann::json& j) {
+  for (const char* side : {"left", "right"}) {
+    const auto& c = j[side];
+    std::cout << side << " camera\n";
+    std::cout << "  fx fy cx cy        " << c["K"][0][0] << " " << c["K"][1][1] << " " << c["K"][0][2] << " "
+              << c["K"][1][2] << "\n";
+    std::cout << "  k1 k2 p1 p2 k3     " << c["D"][0] << " " << c["D"][1] << " " << c["D"][2] << " "
+              << c["D"][3] << " " << c["D"][4] << "\n";
+    if (c["fold_radius_px"].is_null())
+      std::cout << "  fold radius        none (the model is monotonic: every pixel is valid)\n";
+    else
+      std::cout << "  fold radius        " << c["fold_radius_px"].get<double>() << " px\n";
+    std::cout << "  valid pixels       " << 100.0 * c["valid_pixel_share"].get<double>() << " %\n";
+    std::cout << "  undistort max round-trip error " << c["max_roundtrip_error_px"].get<double>() << " px\n";
+  }
+  std::cout << "rig\n  baseline           " << j["rig"]["baseline_mm"].get<double>() << " mm\n"
+            << "  rotation           " << j["rig"]["rotation_deg"].get<double>() << " deg\n";
+}
+
+}  // namespace
+
+void add_calib_commands(CLI::App& app) {
+  auto* calib = app.add_subcommand("calib", "Calibration files");
+  calib->require_subcommand(1);
+  auto* info =
+      calib->add_subcommand("info", "Describe a calibration: models, valid domain, undistort accuracy");
+  auto files = std::make_shared<std::vector<std::string>>();
+  auto json = std::make_shared<bool>(false);
+  info->add_option("files", *files, "Calibration YAML (one file, or intrinsics and extrinsics)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  info->add_flag("--json", *json, "Print JSON");
+  info->callback([files, json] {
+    std::vector<std::filesystem::path> paths(files->begin(), files->end());
+    const recon::StereoRig rig = recon::load_rig(paths);
+    nlohmann::json j;
+    j["files"] = *files;
+    j["image_size"] = {rig.left.width(), rig.left.height()};
+    j["left"] = camera_json(rig.left);
+    j["right"] = camera_json(rig.right);
+    const auto C = rig.right_center();
+    j["rig"] = {{"R",
+                 {{rig.R(0, 0), rig.R(0, 1), rig.R(0, 2)},
+                  {rig.R(1, 0), rig.R(1, 1), rig.R(1, 2)},
+                  {rig.R(2, 0), rig.R(2, 1), rig.R(2, 2)}}},
+                {"T_mm", {rig.T.x(), rig.T.y(), rig.T.z()}},
+                {"right_center_mm", {C.x(), C.y(), C.z()}},
+                {"baseline_mm", rig.baseline_mm()},
+                {"rotation_deg", rig.rotation_angle_rad() * 180.0 / M_PI}};
+    if (*json)
+      std::cout << j.dump(2) << "\n";
+    else
+      print_text(j);
+  });
+}
+
+}  // namespace naneye::tools

@@ -1,0 +1,9 @@
+#pragma once
+// Each subcommand group of `naneye` lives in its own cmd_<name>.cpp and adds itself to the app here.
+#include <CLI/CLI.hpp>
+
+namespace naneye::tools {
+
+void add_calib_commands(CLI::App& app);
+
+}  // namespace naneye::tools

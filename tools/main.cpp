@@ -1,0 +1,26 @@
+// `naneye`: the project's command-line tools. Each subcommand prints a clear error and exits
+// non-zero on bad input; JSON output goes to stdout, logs to stderr.
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  // Logs go to stderr so that stdout stays machine-readable (JSON lines).
+  spdlog::set_default_logger(spdlog::stderr_color_mt("cli"));
+  CLI::App app{"naneye: NanEye Stereo capture, replay and 3D reconstruction tools"};
+  app.require_subcommand(1);
+  naneye::tools::add_calib_commands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::cerr << "naneye: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
