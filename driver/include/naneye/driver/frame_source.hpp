@@ -1,0 +1,63 @@
+#pragma once
+// The one interface every backend implements (usb://, v4l2://, file://, sim://). A source runs its
+// own capture thread and hands pairs over through a lock-free single-producer/single-consumer ring;
+// the consumer calls next(). Live sources drop the oldest pair when the consumer falls behind (and
+// count it); replay at max speed blocks the producer instead and drops nothing.
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "naneye/driver/frame.hpp"
+
+namespace naneye::driver {
+
+enum class SourceState { starting, streaming, waiting_for_device, stalled, finished, failed, stopped };
+const char* to_string(SourceState s);
+
+// Every counter the parser, the pairer and the backend keep. Monotonic; read as a snapshot.
+struct SourceCounters {
+  std::uint64_t bytes = 0;
+  std::uint64_t records = 0;             // complete records delivered by the parser
+  std::uint64_t sync_losses = 0;         // header not where expected: acquisition restarted
+  std::uint64_t seq_gaps = 0;            // records lost upstream (sum of seq jumps)
+  std::uint64_t cut_records = 0;         // records cut short, dropped
+  std::uint64_t reference_failures = 0;  // reference-pixel check failed
+  std::uint64_t unpaired = 0;            // frames that found no partner within the tolerance
+  std::uint64_t pairs = 0;               // pairs handed to the consumer
+  std::uint64_t pairs_dropped = 0;       // oldest pairs dropped because the consumer fell behind
+  std::uint64_t reconnects = 0;
+  std::uint64_t transfer_errors = 0;
+  std::uint64_t stalls = 0;
+};
+
+struct SourceInfo {
+  std::string uri;
+  std::string kind;        // "usb", "v4l2", "file", "sim"
+  std::string device;      // e.g. "10f8:c487 bus 1 dev 4 serial X" or "/dev/video0", or the file path
+  bool live = true;        // live: drop-oldest; replay at max speed: blocking, lossless
+  double nominal_fps = 0;  // 0 when unknown
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual void start() = 0;  // starts the capture thread; errors opening the source throw SourceError
+  virtual void stop() = 0;   // cancels everything in flight and joins; idempotent
+  // The next pair, or nullptr after `timeout` or once the source is finished/stopped (see state()).
+  virtual PairPtr next(std::chrono::milliseconds timeout) = 0;
+  virtual SourceState state() const = 0;
+  virtual SourceCounters counters() const = 0;
+  virtual SourceInfo info() const = 0;
+  // Set when state() is failed, or for a replay that ended on a damaged file (where in it, and why).
+  virtual std::optional<std::string> error() const = 0;
+};
+
+// Bad URIs, bad parameters, devices or files that cannot be opened.
+class SourceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace naneye::driver
