@@ -155,7 +155,7 @@ TEST(Recorder, RecordThenReplayIsBitExact) {
   EXPECT_EQ(all, std::vector<std::uint8_t>(bytes.begin() + 1234, bytes.end()));
 
   auto a = open_started("file://" + raw.str() + "?speed=max");
-  auto b = open_started(neyd.str() + "");  // plain path: file://, realtime pacing of the recorded times
+  auto b = open_started("file://" + neyd.str() + "?speed=max");
   const Drained da = drain(*a), db = drain(*b);
   ASSERT_EQ(da.pairs.size(), 7u);
   ASSERT_EQ(db.pairs.size(), 7u);
