@@ -95,11 +95,15 @@ TEST(FileSource, RealtimeFollowsTheRecordedTiming) {
   const auto t0 = std::chrono::steady_clock::now();
   auto s = open_started("file://" + f.str());
   EXPECT_TRUE(s->info().live);
-  EXPECT_EQ(drain(*s).pairs.size(), 6u);
+  // Real-time replay hands over like a live source (drop-oldest): on a loaded machine the consumer
+  // may miss a pair, but every pair is either delivered or counted as dropped.
+  const std::size_t delivered = drain(*s).pairs.size();
+  EXPECT_EQ(delivered + s->counters().pairs_dropped, 6u);
   EXPECT_GE(std::chrono::steady_clock::now() - t0, 100ms);
   const auto t1 = std::chrono::steady_clock::now();
   auto fast = open_started("file://" + f.str() + "?speed=10");
-  EXPECT_EQ(drain(*fast).pairs.size(), 6u);
+  const std::size_t delivered_fast = drain(*fast).pairs.size();
+  EXPECT_EQ(delivered_fast + fast->counters().pairs_dropped, 6u);
   EXPECT_GE(std::chrono::steady_clock::now() - t1, 10ms);
 }
 
