@@ -3,11 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <toml++/toml.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include "log.hpp"
 
 namespace naneye::driver {
 namespace {
@@ -131,8 +133,7 @@ std::vector<UsbProfile> load_usb_profiles(const std::filesystem::path& dir) {
     try {
       out.push_back(load_usb_profile(f));
     } catch (const std::exception& e) {
-      spdlog::get("driver") ? spdlog::get("driver")->warn("skipping device profile: {}", e.what())
-                            : spdlog::warn("skipping device profile: {}", e.what());
+      log()->warn("skipping device profile: {}", e.what());
     }
   }
   return out;

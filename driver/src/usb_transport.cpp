@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "log.hpp"
 #include "usb_open.hpp"
 
 namespace naneye::driver {
@@ -17,11 +18,6 @@ using Clock = std::chrono::steady_clock;
 
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
-
-std::shared_ptr<spdlog::logger> log() {
-  auto l = spdlog::get("driver");
-  return l ? l : spdlog::default_logger();
 }
 
 }  // namespace

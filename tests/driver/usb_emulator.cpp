@@ -107,9 +107,13 @@ void UsbEmulator::plug(const UsbDeviceSpec& spec, std::vector<std::uint8_t> stre
   }
   // The handler must be in place before the "add" uevent, so that a hotplug-driven open works.
   const std::string node = devnode();
+  // A replugged node gets a fresh handler registration (umockdev refuses a second one).
+  if (std::find(attached_.begin(), attached_.end(), node) != attached_.end())
+    umockdev_testbed_detach_ioctl(testbed_, node.c_str(), nullptr);
+  else
+    attached_.push_back(node);
   if (!umockdev_testbed_attach_ioctl(testbed_, node.c_str(), handler_, nullptr))
     throw std::runtime_error("umockdev_testbed_attach_ioctl failed for " + node);
-  attached_.push_back(node);
   char b[16];
   std::snprintf(b, sizeof b, "%03d/%03d", spec.bus, spec.address);
   const std::string desc =
