@@ -7,6 +7,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -29,6 +30,25 @@ bool V4l2Error::device_gone() const {
   return errno_value == ENODEV || errno_value == ENOENT || errno_value == ENXIO;
 }
 
+V4l2Format V4l2Device::pick_format(const std::string& path) const {
+  std::vector<std::uint32_t> offered;
+  for (std::uint32_t i = 0;; ++i) {
+    v4l2_fmtdesc d{};
+    d.index = i;
+    d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (xioctl(VIDIOC_ENUM_FMT, &d) < 0) break;
+    offered.push_back(d.pixelformat);
+  }
+  // Most bits first: GREY would throw two of the sensor's ten away.
+  for (auto f : {V4l2Format::y10, V4l2Format::y16, V4l2Format::sgrbg10, V4l2Format::grey})
+    if (std::find(offered.begin(), offered.end(), fourcc(f)) != offered.end()) return f;
+  std::string list;
+  for (auto f : offered) list += (list.empty() ? "" : ", ") + fourcc_text(f);
+  throw V4l2Error(path + ": offers none of Y10, Y16, SGRBG10, GREY (it offers: " +
+                      (list.empty() ? "nothing" : list) + ")",
+                  EINVAL);
+}
+
 int V4l2Device::xioctl(unsigned long request, void* arg) const {
   int r;
   do {
@@ -37,7 +57,8 @@ int V4l2Device::xioctl(unsigned long request, void* arg) const {
   return r;
 }
 
-void V4l2Device::open(const std::string& path, V4l2Layout layout, V4l2Format format, int buffer_count) {
+void V4l2Device::open(const std::string& path, V4l2Layout layout, std::optional<V4l2Format> wanted,
+                      int buffer_count) {
   close();
   path_ = path;
   fd_ = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
@@ -50,6 +71,8 @@ void V4l2Device::open(const std::string& path, V4l2Layout layout, V4l2Format for
     if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) throw V4l2Error(path + ": not a video capture device", EINVAL);
     if (!(caps & V4L2_CAP_STREAMING)) throw V4l2Error(path + ": does not support streaming I/O", EINVAL);
 
+    const V4l2Format format = wanted ? *wanted : pick_format(path);
+    format_ = format;
     int width = 0, height = 0;
     layout_size(layout, width, height);
     v4l2_format fmt{};

@@ -2,6 +2,7 @@
 // One open V4L2 capture node in mmap streaming mode, through plain open/ioctl/mmap/poll.
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,7 +36,9 @@ class V4l2Device {
   V4l2Device& operator=(const V4l2Device&) = delete;
 
   // open + QUERYCAP + S_FMT (checked against the layout's size) + REQBUFS/QUERYBUF/mmap + QBUF all.
-  void open(const std::string& path, V4l2Layout layout, V4l2Format format, int buffer_count);
+  // No `format`: the first of Y10, Y16, SGRBG10, GREY that ENUM_FMT lists.
+  void open(const std::string& path, V4l2Layout layout, std::optional<V4l2Format> format, int buffer_count);
+  V4l2Format format() const { return format_; }
   void stream_on();
   // Waits up to `timeout` for a filled buffer. false on timeout.
   bool dequeue(std::chrono::milliseconds timeout, Dequeued& out);
@@ -56,12 +59,14 @@ class V4l2Device {
     std::size_t length = 0;
   };
   int xioctl(unsigned long request, void* arg) const;
+  V4l2Format pick_format(const std::string& path) const;
 
   int fd_ = -1;
   bool streaming_ = false;
   std::string path_, card_;
   std::vector<Mapping> buffers_;
   std::size_t stride_ = 0, image_size_ = 0;
+  V4l2Format format_ = V4l2Format::y10;
 };
 
 }  // namespace naneye::driver::v4l2_detail

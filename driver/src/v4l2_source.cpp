@@ -89,8 +89,9 @@ class V4l2Source final : public FrameSource {
     have_sequence_ = false;
     last_frame_ = Clock::now();
     state_ = SourceState::streaming;
+    color_ = dev_.format() == V4l2Format::sgrbg10 ? ColorMode::bayer_grbg : s_.color;
     log()->info("v4l2: streaming {} ({}), {} {}", s_.device, dev_.card(), to_string(s_.layout),
-                to_string(s_.format));
+                to_string(dev_.format()));
   }
 
   void run() {
@@ -156,6 +157,7 @@ class V4l2Source final : public FrameSource {
     f.ticks = static_cast<std::uint32_t>(f.ticks64);
     f.host_ns = host_ns;
     f.reference_ok = true;
+    f.color = color_;
   }
 
   void handle(const Dequeued& d) {
@@ -177,7 +179,7 @@ class V4l2Source final : public FrameSource {
       int x0 = 0, y0 = 0;
       v4l2_detail::eye_origin(s_.layout, eye, x0, y0);
       Frame& f = eye == 0 ? p->left : p->right;
-      v4l2_detail::unpack_eye(img, dev_.stride(), s_.format, x0, y0, f);
+      v4l2_detail::unpack_eye(img, dev_.stride(), dev_.format(), x0, y0, f);
       stamp(f, eye == 0 ? Sensor::left : Sensor::right, d, host_ns);
     }
     AtomicCounters::add(counters_.records, 2);
@@ -195,7 +197,7 @@ class V4l2Source final : public FrameSource {
       const auto gap = std::chrono::nanoseconds(std::abs(d.timestamp_ns - held.sensor_ns));
       if (pending_eye_ != eye && gap <= s_.pair_tolerance) {
         Frame& f = right ? pending_->right : pending_->left;
-        v4l2_detail::unpack_eye(img, dev_.stride(), s_.format, 0, 0, f);
+        v4l2_detail::unpack_eye(img, dev_.stride(), dev_.format(), 0, 0, f);
         stamp(f, eye, d, host_ns);
         deliver(std::move(pending_));
         return;
@@ -206,7 +208,7 @@ class V4l2Source final : public FrameSource {
       if (!pending_) return;
     }
     Frame& f = right ? pending_->right : pending_->left;
-    v4l2_detail::unpack_eye(img, dev_.stride(), s_.format, 0, 0, f);
+    v4l2_detail::unpack_eye(img, dev_.stride(), dev_.format(), 0, 0, f);
     stamp(f, eye, d, host_ns);
     pending_eye_ = eye;
   }
@@ -240,6 +242,7 @@ class V4l2Source final : public FrameSource {
   Clock::time_point last_frame_{};
   PairPtr pending_{nullptr, PairReturn{}};
   Sensor pending_eye_ = Sensor::left;
+  ColorMode color_ = ColorMode::mono;
   bool have_first_ = false, have_sequence_ = false;
   std::int64_t first_ns_ = 0;
   std::uint32_t last_sequence_ = 0;
@@ -247,6 +250,18 @@ class V4l2Source final : public FrameSource {
 };
 
 }  // namespace
+
+V4l2Settings v4l2_settings_from(const V4l2Uri& uri) {
+  V4l2Settings s;
+  s.device = uri.device;
+  s.layout = uri.layout;
+  s.format = uri.format;
+  s.color = uri.stream.parser.color;
+  s.pair_tolerance = std::chrono::nanoseconds(uri.stream.pairer.tolerance_ns);
+  s.ring_size = uri.stream.ring_capacity;
+  s.pool_size = uri.stream.ring_capacity + uri.stream.consumer_hold + 2;
+  return s;
+}
 
 std::unique_ptr<FrameSource> make_v4l2_source(V4l2Settings settings, std::string uri) {
   if (settings.buffer_count < 2) throw SourceError("v4l2: buffers must be >= 2");

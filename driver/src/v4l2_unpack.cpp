@@ -2,51 +2,7 @@
 
 #include <linux/videodev2.h>
 
-#include <algorithm>
-#include <cctype>
-
 namespace naneye::driver {
-
-const char* to_string(V4l2Layout l) {
-  switch (l) {
-    case V4l2Layout::side_by_side:
-      return "side-by-side";
-    case V4l2Layout::top_bottom:
-      return "top-bottom";
-    case V4l2Layout::alternate:
-      return "alternate";
-  }
-  return "?";
-}
-
-const char* to_string(V4l2Format f) {
-  switch (f) {
-    case V4l2Format::y10:
-      return "Y10";
-    case V4l2Format::y16:
-      return "Y16";
-    case V4l2Format::grey:
-      return "GREY";
-    case V4l2Format::sgrbg10:
-      return "SGRBG10";
-  }
-  return "?";
-}
-
-std::optional<V4l2Layout> parse_v4l2_layout(const std::string& s) {
-  for (auto l : {V4l2Layout::side_by_side, V4l2Layout::top_bottom, V4l2Layout::alternate})
-    if (s == to_string(l)) return l;
-  return std::nullopt;
-}
-
-std::optional<V4l2Format> parse_v4l2_format(const std::string& s) {
-  std::string up = s;
-  std::transform(up.begin(), up.end(), up.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-  for (auto f : {V4l2Format::y10, V4l2Format::y16, V4l2Format::grey, V4l2Format::sgrbg10})
-    if (up == to_string(f)) return f;
-  return std::nullopt;
-}
 
 std::uint32_t fourcc(V4l2Format f) {
   switch (f) {
@@ -81,7 +37,6 @@ void eye_origin(V4l2Layout layout, int eye, int& x0, int& y0) {
 void unpack_eye(const std::uint8_t* image, std::size_t stride, V4l2Format format, int x0, int y0,
                 Frame& out) {
   const int bpp = bytes_per_pixel(format);
-  out.color = format == V4l2Format::sgrbg10 ? ColorMode::bayer_grbg : ColorMode::mono;
   std::uint16_t* dst = out.pixels.data();
   for (int r = 0; r < kSensorSize; ++r) {
     const std::uint8_t* src = image + static_cast<std::size_t>(y0 + r) * stride +

@@ -9,7 +9,7 @@
 namespace naneye::driver::v4l2_detail {
 
 // Copies the 250 x 250 eye whose top-left pixel is (x0, y0) of `image` (row pitch `stride` bytes)
-// into `out.pixels`, converted to 10-bit values; sets out.color. `image` must hold the whole eye.
+// into `out.pixels`, converted to 10-bit values. `image` must hold the whole eye.
 void unpack_eye(const std::uint8_t* image, std::size_t stride, V4l2Format format, int x0, int y0, Frame& out);
 
 // Where each eye sits in a buffer of the layout: eye 0 = left, 1 = right (unused for alternate).

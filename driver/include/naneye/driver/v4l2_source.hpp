@@ -10,26 +10,14 @@
 #include <string>
 
 #include "naneye/driver/frame_source.hpp"
+#include "naneye/driver/source_uri.hpp"
 
 namespace naneye::driver {
 
-enum class V4l2Layout {
-  side_by_side,  // 500 x 250: left | right
-  top_bottom,    // 250 x 500: left above right
-  alternate,     // 250 x 250: frames alternate left, right (by field TOP/BOTTOM, else sequence parity)
-};
-enum class V4l2Format {
-  y10,      // V4L2_PIX_FMT_Y10: 10 bits in u16 LE
-  y16,      // V4L2_PIX_FMT_Y16: 16 bits, top 10 kept
-  grey,     // V4L2_PIX_FMT_GREY: 8 bits, scaled to 10
-  sgrbg10,  // V4L2_PIX_FMT_SGRBG10: GRBG Bayer, 10 bits in u16 LE
-};
-
-const char* to_string(V4l2Layout l);
-const char* to_string(V4l2Format f);
-std::optional<V4l2Layout> parse_v4l2_layout(
-    const std::string& s);  // "side-by-side", "top-bottom", "alternate"
-std::optional<V4l2Format> parse_v4l2_format(const std::string& s);  // "Y10", "Y16", "GREY", "SGRBG10"
+// V4l2Layout and V4l2Format (and their to_string) come with the URI parser (source_uri.hpp):
+//   side-by-side 500 x 250 left | right; top-bottom 250 x 500 left above right; alternate 250 x 250,
+//   one eye per buffer (field TOP = left, BOTTOM = right, else sequence parity: even = left).
+//   Y10 and SGRBG10: 10 bits in u16 LE; Y16: 16 bits, top 10 kept; GREY: 8 bits, scaled to 10.
 std::uint32_t fourcc(V4l2Format f);
 int bytes_per_pixel(V4l2Format f);
 // Image size the layout needs (both eyes for side-by-side/top-bottom, one for alternate).
@@ -38,7 +26,8 @@ void layout_size(V4l2Layout l, int& width, int& height);
 struct V4l2Settings {
   std::string device = "/dev/video0";
   V4l2Layout layout = V4l2Layout::side_by_side;
-  V4l2Format format = V4l2Format::y10;
+  std::optional<V4l2Format> format;   // unset: the first of Y10, Y16, SGRBG10, GREY the device offers
+  ColorMode color = ColorMode::mono;  // for the grey formats (SGRBG10 is always Bayer GRBG)
   int buffer_count = 4;
   std::chrono::milliseconds poll_timeout{200};
   std::chrono::milliseconds stall_timeout{1000};
@@ -46,10 +35,13 @@ struct V4l2Settings {
   std::chrono::milliseconds backoff_max{5000};
   // alternate layout: a left and a right frame pair when their timestamps differ by at most this
   // (default: half of a 22.7 ms frame period).
-  std::chrono::microseconds pair_tolerance{11'350};
+  std::chrono::nanoseconds pair_tolerance{11'350'000};
   std::size_t pool_size = 8;
   std::size_t ring_size = 4;
 };
+
+// The URI's device, layout, format, colour and pairing tolerance.
+V4l2Settings v4l2_settings_from(const V4l2Uri& uri);
 
 // Throws SourceError when the node exists but cannot give the layout/format (named in the message).
 // A node that is absent at start() is waited for (state waiting_for_device).
