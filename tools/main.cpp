@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   naneye::tools::add_calib_commands(app);
   naneye::tools::add_devices_commands(app);
+  naneye::tools::add_driver_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
