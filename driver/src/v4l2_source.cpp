@@ -85,6 +85,7 @@ class V4l2Source final : public FrameSource {
       std::lock_guard lock(info_mutex_);
       card_ = dev_.card();
     }
+    ever_open_ = true;
     have_first_ = false;
     have_sequence_ = false;
     last_frame_ = Clock::now();
@@ -105,8 +106,9 @@ class V4l2Source final : public FrameSource {
           continue;
         }
         try {
+          const bool was_open = ever_open_;
           open_device();
-          AtomicCounters::add(counters_.reconnects);
+          if (was_open) AtomicCounters::add(counters_.reconnects);
           backoff = s_.backoff_initial;
         } catch (const V4l2Error& e) {
           log()->debug("v4l2: {}; next attempt in {} ms", e.what(), backoff.count());
@@ -243,7 +245,7 @@ class V4l2Source final : public FrameSource {
   PairPtr pending_{nullptr, PairReturn{}};
   Sensor pending_eye_ = Sensor::left;
   ColorMode color_ = ColorMode::mono;
-  bool have_first_ = false, have_sequence_ = false;
+  bool have_first_ = false, have_sequence_ = false, ever_open_ = false;
   std::int64_t first_ns_ = 0;
   std::uint32_t last_sequence_ = 0;
   std::uint64_t delivered_ = 0;

@@ -2,6 +2,7 @@
 // ring of bulk transfers into bit-exact pairs; unplug mid-record and replug; stop with URBs in flight.
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <chrono>
 #include <thread>
 
@@ -187,4 +188,33 @@ TEST(UsbSource, UriParametersOverrideTheProfile) {
   EXPECT_EQ(p.transport.profile.endpoint, 0x86);
   EXPECT_EQ(p.transport.profile.transfer_count, 8);
   EXPECT_FALSE(p.transport.profile.endpoint_confirmed);
+}
+
+TEST(UsbSource, TransferErrorCutsTheRecordAndResyncs) {
+  UsbEmulator emu;
+  UsbDeviceSpec spec;
+  emu.plug(spec, capture(20, 0, 5000));
+  // The 40th 16 KiB transfer starts inside record 5 (the right half of frame 2): it fails with a bus
+  // error and 100 bytes are lost with it.
+  emu.fail_transfer_at(39 * 16384, -EPROTO, 100);
+  auto src = make_usb_source(settings_for(spec, 4, 16384));
+  src->start();
+  std::vector<int> left_seqs;
+  for (int i = 0; i < 9; ++i) {
+    PairPtr p = src->next(std::chrono::seconds(10));
+    ASSERT_TRUE(p) << "pair " << i;
+    EXPECT_TRUE(same_pixels(p->left, 0, p->left.seq));
+    EXPECT_TRUE(same_pixels(p->right, 1, p->right.seq));
+    left_seqs.push_back(p->left.seq);
+  }
+  EXPECT_EQ(left_seqs, (std::vector<int>{0, 2, 6, 8, 10, 12, 14, 16, 18}));
+  ASSERT_TRUE(wait_until([&] { return src->counters().pairs == 9; }, 2000));
+  const auto c = src->counters();
+  EXPECT_EQ(c.transfer_errors, 1u);
+  EXPECT_EQ(c.cut_records, 1u);  // record 5
+  EXPECT_EQ(c.unpaired, 1u);     // record 4 lost its partner
+  EXPECT_EQ(c.records, 19u);  // all but the cut one
+  EXPECT_EQ(c.reconnects, 0u);
+  EXPECT_EQ(src->state(), SourceState::streaming);
+  src->stop();
 }

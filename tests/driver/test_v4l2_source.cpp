@@ -79,7 +79,7 @@ V4l2Frame make_frame(V4l2Layout layout, V4l2Format f, int frame, std::int64_t ts
   return ::testing::AssertionSuccess();
 }
 
-V4l2Settings fast_settings(V4l2Layout l, V4l2Format f) {
+V4l2Settings fast_settings(V4l2Layout l, std::optional<V4l2Format> f) {
   V4l2Settings s;
   s.layout = l;
   s.format = f;
@@ -252,4 +252,30 @@ TEST(V4l2Source, RefusesALayoutOfTheWrongSize) {
   } catch (const SourceError& e) {
     EXPECT_NE(std::string(e.what()).find("250x500"), std::string::npos) << e.what();
   }
+}
+
+TEST(V4l2Source, NoFrameForTheStallTimeoutIsAStall) {
+  V4l2Emulator emu;
+  V4l2DeviceSpec spec;
+  spec.formats = {V4L2_PIX_FMT_Y10};
+  std::deque<V4l2Frame> frames;
+  frames.push_back(make_frame(V4l2Layout::side_by_side, V4l2Format::y10, 0, 0));
+  V4l2Frame damaged = make_frame(V4l2Layout::side_by_side, V4l2Format::y10, 1, kPeriodNs);
+  damaged.error = true;
+  frames.push_back(std::move(damaged));
+  emu.plug(spec, std::move(frames));
+  auto s = fast_settings(V4l2Layout::side_by_side, std::nullopt);  // format picked from ENUM_FMT
+  s.stall_timeout = std::chrono::milliseconds(150);
+  auto src = make_v4l2_source(s);
+  src->start();
+  ASSERT_TRUE(src->next(std::chrono::seconds(5)));
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (src->state() != SourceState::stalled && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  EXPECT_EQ(src->state(), SourceState::stalled);
+  const auto c = src->counters();
+  EXPECT_EQ(c.stalls, 1u);
+  EXPECT_EQ(c.cut_records, 2u);  // both eyes of the flagged buffer
+  EXPECT_EQ(c.pairs, 1u);
+  EXPECT_EQ(emu.chosen_format(), fourcc(V4l2Format::y10));
 }

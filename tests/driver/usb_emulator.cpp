@@ -155,6 +155,13 @@ void UsbEmulator::remove_locked() {
   cv_.notify_all();
 }
 
+void UsbEmulator::fail_transfer_at(std::size_t at, int status, std::size_t lost) {
+  std::lock_guard lock(mutex_);
+  fail_at_ = at;
+  fail_status_ = status;
+  fail_lost_ = lost;
+}
+
 bool UsbEmulator::wait_unplugged(int timeout_ms) {
   std::unique_lock lock(mutex_);
   return cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] { return gone_; });
@@ -308,8 +315,15 @@ void UsbEmulator::answer_control(Urb& u) {
 
 bool UsbEmulator::fill_bulk(Urb& u) {
   usbdevfs_urb* urb = urb_of(u.urb);
-  std::size_t end = std::min(stream_.size(), unplug_at_);
+  const std::size_t end = std::min(stream_.size(), unplug_at_);
   if (pos_ >= end) return false;
+  if (pos_ <= fail_at_ && fail_at_ < std::min(end, pos_ + static_cast<std::size_t>(urb->buffer_length))) {
+    pos_ = std::min(end, fail_at_ + fail_lost_);
+    fail_at_ = SIZE_MAX;
+    urb->actual_length = 0;
+    urb->status = fail_status_;
+    return true;
+  }
   const std::size_t n = std::min<std::size_t>(end - pos_, static_cast<std::size_t>(urb->buffer_length));
   std::memcpy(urb->buffer, stream_.data() + pos_, n);
   pos_ += n;

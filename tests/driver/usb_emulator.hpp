@@ -46,6 +46,9 @@ class UsbEmulator {
   // given back with -ENODEV, later ioctls fail with ENODEV, and the sysfs device is removed.
   void unplug_after(std::size_t after_bytes);
   bool wait_unplugged(int timeout_ms);
+  // The bulk URB that would carry stream byte `at` completes with `status` (e.g. -EPROTO) instead,
+  // and `lost` bytes of the stream vanish with it, as on a damaged bus.
+  void fail_transfer_at(std::size_t at, int status, std::size_t lost);
 
   // Figures the tests check.
   std::size_t bytes_served() const;
@@ -82,6 +85,8 @@ class UsbEmulator {
   std::vector<std::uint8_t> stream_;
   std::size_t pos_ = 0;
   std::size_t unplug_at_ = SIZE_MAX;
+  std::size_t fail_at_ = SIZE_MAX, fail_lost_ = 0;
+  int fail_status_ = 0;
   std::deque<Urb> pending_;  // submitted bulk IN, oldest first
   std::deque<Urb> ready_;    // completed (control, discarded, dead) waiting to be reaped
   std::size_t max_in_flight_ = 0;
