@@ -2,6 +2,7 @@
 
 #include <linux/usbdevice_fs.h>
 #include <sys/ioctl.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -101,7 +102,7 @@ void UsbEmulator::plug(const UsbDeviceSpec& spec, std::vector<std::uint8_t> stre
     pos_ = 0;
     served_ = 0;
     unplug_at_ = SIZE_MAX;
-    gone_ = false;
+    gone_ = true;  // until the new node file exists: a client must not open the old one and succeed
     claimed_ = false;
     present_ = true;
   }
@@ -129,6 +130,8 @@ void UsbEmulator::plug(const UsbDeviceSpec& spec, std::vector<std::uint8_t> stre
     g_clear_error(&err);
     throw std::runtime_error("umockdev_testbed_add_from_string: " + msg);
   }
+  std::lock_guard lock(mutex_);
+  gone_ = false;
 }
 
 void UsbEmulator::unplug_after(std::size_t after_bytes) {
@@ -150,6 +153,10 @@ void UsbEmulator::remove_locked() {
   pending_.clear();
   const std::string sys = syspath();
   umockdev_testbed_uevent(testbed_, sys.c_str(), "remove");
+  // remove_device() only unlinks nodes of devices with a "dev" (major:minor) attribute.
+  gchar* root = umockdev_testbed_get_root_dir(testbed_);
+  ::unlink((std::string(root) + devnode()).c_str());
+  g_free(root);
   umockdev_testbed_remove_device(testbed_, sys.c_str());
   present_ = false;
   cv_.notify_all();

@@ -38,7 +38,7 @@ void V4l2Emulator::plug(const V4l2DeviceSpec& spec, std::deque<V4l2Frame> frames
     bufs_.clear();
     streaming_ = false;
     present_ = true;
-    gone_ = false;
+    gone_ = true;  // until the new node file exists: a client must not open the old one and succeed
     served_ = 0;
     unplug_at_ = SIZE_MAX;
     sequence_ = 0;
@@ -61,6 +61,8 @@ void V4l2Emulator::plug(const V4l2DeviceSpec& spec, std::deque<V4l2Frame> frames
     g_clear_error(&err);
     throw std::runtime_error("add_from_string: " + msg);
   }
+  std::lock_guard lock(mutex_);
+  gone_ = false;
 }
 
 void V4l2Emulator::unplug_after(std::size_t frames) {
@@ -74,6 +76,11 @@ void V4l2Emulator::remove_locked() {
   gone_ = true;
   present_ = false;
   umockdev_testbed_uevent(testbed_, syspath().c_str(), "remove");
+  // remove_device() only unlinks nodes of devices with a "dev" (major:minor) attribute: without this a
+  // client could reopen the dead node and talk to a handler that is about to be detached.
+  gchar* root = umockdev_testbed_get_root_dir(testbed_);
+  ::unlink((std::string(root) + node()).c_str());
+  g_free(root);
   umockdev_testbed_remove_device(testbed_, syspath().c_str());
 }
 
