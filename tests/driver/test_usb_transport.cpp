@@ -2,6 +2,8 @@
 // device loss and return, clean stop with transfers in flight.
 #include <gtest/gtest.h>
 
+#include <libusb.h>
+
 #include <chrono>
 #include <mutex>
 #include <random>
@@ -172,4 +174,24 @@ TEST(UsbTransport, UnplugAndReplugReconnects) {
   EXPECT_TRUE(std::equal(second.begin(), second.end(), sink.bytes.begin() + 250'000));
   EXPECT_EQ(t.counters().reconnects, 1u);
   EXPECT_EQ(t.counters().connects, 2u);
+}
+
+TEST(UsbTransport, HotplugArrivalCutsTheBackoffShort) {
+  if (!libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) GTEST_SKIP() << "libusb without hotplug: polling only";
+  UsbEmulator emu;
+  UsbDeviceSpec spec;
+  emu.plug(spec, random_bytes(20'000, 7));
+  emu.unplug_after(20'000);
+  CollectingSink sink;
+  auto s = settings_for(spec, 4, 4096);
+  s.backoff_initial = std::chrono::milliseconds(20'000);  // polling alone would not retry within the test
+  s.backoff_max = s.backoff_initial;
+  UsbTransport t(s, sink);
+  t.start();
+  ASSERT_TRUE(emu.wait_unplugged(10000));
+  ASSERT_TRUE(wait_until([&] { return t.state() == SourceState::waiting_for_device; }));
+  spec.address = 6;
+  emu.plug(spec, random_bytes(10'000, 8));
+  ASSERT_TRUE(wait_until([&] { return sink.size() == 30'000; }, 5000)) << "no reconnect on the arrival event";
+  EXPECT_EQ(t.counters().reconnects, 1u);
 }
