@@ -233,17 +233,18 @@ struct UsbTransport::Impl {
       }
       pump(std::chrono::milliseconds(50));
       if (stopping) break;
+      // A stalled endpoint is cleared in place once its transfers are back: not a reconnect.
+      if (clear_halt && active == 0 && !lost && !broken) {
+        libusb_clear_halt(handle, s.profile.endpoint);
+        clear_halt = false;
+        for (auto& slot : slots)
+          if (!slot.active) submit(slot);
+      }
       if (lost || broken || active == 0) {
         const bool was_lost = lost;
         drop(was_lost ? "board lost" : "transfers failing");
         next_try = Clock::now() + (was_lost ? s.backoff_initial : backoff);
         continue;
-      }
-      if (clear_halt && active == 0) {
-        libusb_clear_halt(handle, s.profile.endpoint);
-        clear_halt = false;
-        for (auto& slot : slots)
-          if (!slot.active) submit(slot);
       }
       const auto idle = std::chrono::nanoseconds(now_ns() - last_data_ns);
       if (state.load() == SourceState::streaming && idle > s.stall_timeout) {

@@ -4,6 +4,7 @@
 
 #include <libusb.h>
 
+#include <cerrno>
 #include <chrono>
 #include <mutex>
 #include <random>
@@ -141,7 +142,7 @@ TEST(UsbTransport, SerialSelectsTheBoard) {
   EXPECT_NE(right.device_description().find("serial ABC123"), std::string::npos);
 }
 
-TEST(UsbTransport, StallIsCountedAndEnds) {
+TEST(UsbTransport, NoDataForTheStallTimeoutIsAStall) {
   UsbEmulator emu;
   UsbDeviceSpec spec;
   emu.plug(spec, random_bytes(50'000, 4));
@@ -194,4 +195,24 @@ TEST(UsbTransport, HotplugArrivalCutsTheBackoffShort) {
   emu.plug(spec, random_bytes(10'000, 8));
   ASSERT_TRUE(wait_until([&] { return sink.size() == 30'000; }, 5000)) << "no reconnect on the arrival event";
   EXPECT_EQ(t.counters().reconnects, 1u);
+}
+
+TEST(UsbTransport, EndpointStallIsClearedInPlace) {
+  UsbEmulator emu;
+  UsbDeviceSpec spec;
+  const auto stream = random_bytes(200'000, 9);
+  emu.plug(spec, stream);
+  emu.fail_transfer_at(5 * 8192, -EPIPE, 0);  // the sixth transfer stalls; no bytes are lost
+  CollectingSink sink;
+  UsbTransport t(settings_for(spec, 4, 8192), sink);
+  t.start();
+  ASSERT_TRUE(wait_until([&] { return sink.size() == stream.size(); })) << sink.size();
+  t.stop();
+  EXPECT_TRUE(sink.bytes == stream);
+  EXPECT_EQ(sink.discontinuities, 2);  // the stall, then the stop
+  EXPECT_EQ(emu.clear_halts(), 2u);    // once at the claim, once after the stall
+  const auto c = t.counters();
+  EXPECT_EQ(c.transfer_errors, 1u);
+  EXPECT_EQ(c.reconnects, 0u);
+  EXPECT_EQ(c.connects, 1u);
 }

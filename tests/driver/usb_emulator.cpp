@@ -194,6 +194,10 @@ bool UsbEmulator::claimed() const {
   std::lock_guard lock(mutex_);
   return claimed_;
 }
+std::size_t UsbEmulator::clear_halts() const {
+  std::lock_guard lock(mutex_);
+  return clear_halts_;
+}
 std::vector<ControlRecord> UsbEmulator::vendor_controls() const {
   std::lock_guard lock(mutex_);
   return controls_;
@@ -237,8 +241,11 @@ bool UsbEmulator::handle(UMockdevIoctlClient* client) {
       claimed_ = false;
       umockdev_ioctl_client_complete(client, 0, 0);
       return true;
-    case USBDEVFS_SETINTERFACE:
     case USBDEVFS_CLEAR_HALT:
+      ++clear_halts_;
+      umockdev_ioctl_client_complete(client, 0, 0);
+      return true;
+    case USBDEVFS_SETINTERFACE:
     case USBDEVFS_RESET:
     case USBDEVFS_RESETEP:
       umockdev_ioctl_client_complete(client, 0, 0);

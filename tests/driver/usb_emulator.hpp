@@ -56,6 +56,7 @@ class UsbEmulator {
   std::size_t in_flight() const;
   std::size_t discarded() const;
   bool claimed() const;
+  std::size_t clear_halts() const;
   std::vector<ControlRecord> vendor_controls() const;
 
  private:
@@ -92,6 +93,7 @@ class UsbEmulator {
   std::size_t max_in_flight_ = 0;
   std::size_t discarded_ = 0;
   bool claimed_ = false;
+  std::size_t clear_halts_ = 0;
   std::vector<ControlRecord> controls_;
   std::size_t served_ = 0;
   std::vector<std::string> attached_;
