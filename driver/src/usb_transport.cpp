@@ -49,7 +49,7 @@ struct UsbTransport::Impl {
   bool ever_connected = false;
   int consecutive_errors = 0;
   std::int64_t last_data_ns = 0;
-  std::string last_why;
+  std::string last_why, told_why;
   std::atomic<std::uint64_t> bytes{0}, transfers{0}, errors{0}, reconnects{0}, stalls{0}, connects{0};
   mutable std::mutex desc_mutex;
   std::string desc;
@@ -167,6 +167,7 @@ struct UsbTransport::Impl {
     }
     handle = dev.handle;
     device = libusb_get_device(handle);
+    told_why.clear();
     lost = broken = clear_halt = false;
     consecutive_errors = 0;
     for (auto& slot : slots) submit(slot);
@@ -223,7 +224,10 @@ struct UsbTransport::Impl {
             backoff = s.backoff_initial;
             continue;
           }
-          log()->debug("usb: {}; next attempt in {} ms", last_why, backoff.count());
+          // Say why once per distinct reason (a missing board is normal; a failing bring-up is not).
+          if (last_why != told_why)
+            log()->warn("usb: {}; retrying with backoff up to {} ms", last_why, s.backoff_max.count());
+          told_why = last_why;
           next_try = Clock::now() + backoff;
           backoff = std::min(backoff * 2, s.backoff_max);
         }

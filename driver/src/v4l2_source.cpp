@@ -44,7 +44,15 @@ class V4l2Source final : public FrameSource {
     try {
       open_device();
     } catch (const V4l2Error& e) {
-      if (!e.device_gone()) throw SourceError(e.what());
+      if (!e.device_gone()) {
+        {
+          std::lock_guard lock(info_mutex_);
+          error_ = e.what();
+        }
+        state_ = SourceState::failed;
+        ring_.close();
+        throw SourceError(e.what());
+      }
       log()->warn("v4l2: {}: waiting for the device", e.what());
       state_ = SourceState::waiting_for_device;
     }

@@ -6,6 +6,8 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -215,4 +217,46 @@ TEST(UsbTransport, EndpointStallIsClearedInPlace) {
   EXPECT_EQ(c.transfer_errors, 1u);
   EXPECT_EQ(c.reconnects, 0u);
   EXPECT_EQ(c.connects, 1u);
+}
+
+TEST(UsbTransport, BringupCommandRunsWithTheBoardsAddress) {
+  UsbEmulator emu;
+  UsbDeviceSpec spec;
+  spec.bus = 3;
+  spec.address = 12;
+  emu.plug(spec, random_bytes(10'000, 10));
+  const std::string out = ::testing::TempDir() + "naneye_bringup_env.txt";
+  std::remove(out.c_str());
+  CollectingSink sink;
+  auto s = settings_for(spec, 4, 4096);
+  s.profile.bringup_command =
+      "echo $NANEYE_USB_BUS $NANEYE_USB_ADDRESS $NANEYE_USB_VID $NANEYE_USB_PID $NANEYE_USB_SERIAL > " + out;
+  UsbTransport t(s, sink);
+  t.start();
+  ASSERT_TRUE(wait_until([&] { return sink.size() == 10'000; }));
+  t.stop();
+  std::ifstream in(out);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "3 12 10f8 c487 NE0001");
+}
+
+TEST(UsbTransport, FailingBringupKeepsWaitingWithoutClaiming) {
+  UsbEmulator emu;
+  UsbDeviceSpec spec;
+  emu.plug(spec, random_bytes(10'000, 11));
+  CollectingSink sink;
+  auto s = settings_for(spec, 4, 4096);
+  s.profile.bringup_command = "exit 3";
+  int hook_calls = 0;
+  s.bringup = [&](libusb_device_handle*) { return ++hook_calls, true; };
+  UsbTransport t(s, sink);
+  t.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(t.state(), SourceState::waiting_for_device);
+  EXPECT_FALSE(emu.claimed());
+  EXPECT_EQ(hook_calls, 0);  // the command failed first
+  t.stop();
+  EXPECT_EQ(sink.size(), 0u);
+  EXPECT_EQ(t.counters().connects, 0u);
 }

@@ -238,6 +238,9 @@ TEST(V4l2Source, RefusesAFormatTheDeviceLacks) {
   } catch (const SourceError& e) {
     EXPECT_NE(std::string(e.what()).find("Y10"), std::string::npos) << e.what();
   }
+  EXPECT_EQ(src->state(), SourceState::failed);
+  EXPECT_TRUE(src->error().has_value());
+  EXPECT_FALSE(src->next(std::chrono::milliseconds(0)));
 }
 
 TEST(V4l2Source, RefusesALayoutOfTheWrongSize) {
