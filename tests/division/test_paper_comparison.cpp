@@ -66,7 +66,7 @@ SixPoints project(const StereoRig& rig, std::vector<Eigen::Vector3d> truth) {
   return s;
 }
 
-// Centre: the same 2 x 3 grid as tests/recon/test_paper_synthetic.cpp, ~70 mm away, tilted, within ~35 px of
+// Centre: the same 2 x 3 grid as tests/recon/test_paper_synthetic.cpp, ~70 mm away, tilted, within ~8 px of
 // the principal point. The paper does not say where its six points were.
 SixPoints central_points(const StereoRig& rig) {
   const Eigen::Matrix3d tilt =
