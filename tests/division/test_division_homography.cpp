@@ -119,7 +119,7 @@ TEST(DivisionHomography, DegradesGracefullyWithNoise) {
       sq_single += std::pow(h.lambda_left / -7.9e-6 - 1.0, 2);
       // Symmetric transfer: each residual carries the noise of both eyes (sqrt(2) sigma), less what the
       // 10 parameters absorb.
-      EXPECT_LT(h.rms, 1.6 * sigma);
+      EXPECT_LT(h.rms, 1.8 * sigma);
       EXPECT_GT(h.rms, 1.0 * sigma);
       EXPECT_LE(h.rms, h.linear_rms * (1 + 1e-9));
     }
