@@ -32,7 +32,7 @@ TEST(DivisionFit, Dataset3ResidualGrowsWithRadius) {
   for (const auto* cam : {&rig.left, &rig.right}) {
     double rms[2] = {0, 0};
     for (const auto v : {DivisionVariant::image_centre, DivisionVariant::normalized}) {
-      const DivisionFit f = fit_division_to_camera(*cam, v, 2);
+      const DivisionFit f = fit_division_to_camera(*cam, v, 4);
       ASSERT_TRUE(f.ok);
       const Profile p = profile(f);
       std::printf(
@@ -48,16 +48,16 @@ TEST(DivisionFit, Dataset3ResidualGrowsWithRadius) {
       // Exactly the grid pixels inside the polynomial's domain are used (the left camera folds at 138.6 px,
       // the right one never).
       int inside = 0;
-      for (int y = 0; y < 250; y += 2) {
-        for (int x = 0; x < 250; x += 2) inside += cam->in_domain(Eigen::Vector2d(x, y)) ? 1 : 0;
+      for (int y = 0; y < 250; y += 4) {
+        for (int x = 0; x < 250; x += 4) inside += cam->in_domain(Eigen::Vector2d(x, y)) ? 1 : 0;
       }
       EXPECT_EQ(f.samples_used, inside);
-      EXPECT_LT(inside, cam == &rig.left ? 0.9 * 125 * 125 : 125 * 125 + 1);
+      EXPECT_LT(inside, cam == &rig.left ? 0.9 * 63 * 63 : 63 * 63 + 1);
       // A least-squares optimum: moving lambda either way raises the RMS.
       for (const double k : {0.99, 1.01}) {
         DivisionModel m = f.model;
         m.lambda *= k;
-        EXPECT_GT(division_residuals(*cam, m, 2).rms_px, f.rms_px);
+        EXPECT_GT(division_residuals(*cam, m, 4).rms_px, f.rms_px);
       }
     }
     // The left principal point lies 13 px from the image centre: centring there costs accuracy.

@@ -100,15 +100,16 @@ TEST(DivisionHomography, TooFewPointsRefused) {
 }
 
 // With corner noise the estimate degrades smoothly: the same noise pattern scaled by sigma moves lambda
-// in proportion to sigma (no breakdown), the transfer RMS sits at the noise level, and 19 planes sharing
+// in proportion to sigma (no breakdown), the transfer RMS sits at the noise level, and 10 planes sharing
 // lambda beat one plane. The small baseline makes lambda weakly observable: ~1 % per 0.01 px of noise.
 TEST(DivisionHomography, DegradesGracefullyWithNoise) {
   const StereoRig rig = rig_d3();
   const BoardGeometry b;
   const Truth t = pixel_truth(rig);
-  const auto boards = dataset3_boards(b);
+  auto boards = dataset3_boards(b);
+  boards.resize(10);  // enough to show the gain of sharing lambda; keeps the test quick under ASan
   std::vector<double> joint_errors;
-  for (const double sigma : {0.01, 0.05, 0.2}) {
+  for (const double sigma : {0.02, 0.2}) {
     std::mt19937 rng(11);  // same pattern at every sigma
     double sq_single = 0;
     std::vector<PlaneCorrespondences> planes;
@@ -129,7 +130,7 @@ TEST(DivisionHomography, DegradesGracefullyWithNoise) {
     const double rel_l = std::abs(joint.lambda_left / -7.9e-6 - 1.0);
     const double rel_r = std::abs(joint.lambda_right / -7.2e-6 - 1.0);
     std::printf(
-        "sigma %.2f px: lambda rel. error, one plane (RMS of 19) %.4f; 19 planes %.5f / %.5f; rms %.4f\n",
+        "sigma %.2f px: lambda rel. error, one plane (RMS of 10) %.4f; 10 planes %.5f / %.5f; rms %.4f\n",
         sigma, single_rel, rel_l, rel_r, joint.rms);
     EXPECT_LT(rel_l, 2.0 * sigma);
     EXPECT_LT(rel_r, 2.0 * sigma);
@@ -138,7 +139,7 @@ TEST(DivisionHomography, DegradesGracefullyWithNoise) {
     EXPECT_LT(joint.rms, 1.5 * sigma);
     joint_errors.push_back(rel_l);
   }
-  // 20x the noise gives roughly 20x the error: between 8x and 40x.
-  EXPECT_GT(joint_errors[2] / joint_errors[0], 8.0);
-  EXPECT_LT(joint_errors[2] / joint_errors[0], 40.0);
+  // 10x the noise gives roughly 10x the error: between 4x and 20x.
+  EXPECT_GT(joint_errors[1] / joint_errors[0], 4.0);
+  EXPECT_LT(joint_errors[1] / joint_errors[0], 20.0);
 }
