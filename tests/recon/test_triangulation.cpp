@@ -59,8 +59,8 @@ std::vector<Truth> points_over_valid_area(const StereoRig& rig, int step_px) {
 
 TEST(Triangulation, NoiseFreeIsExactForEveryMethodOverTheValidArea) {
   const StereoRig rig = dataset3();
-  const std::vector<Truth> truth = points_over_valid_area(rig, 5);
-  ASSERT_GT(truth.size(), 1500u);
+  const std::vector<Truth> truth = points_over_valid_area(rig, 7);
+  ASSERT_GT(truth.size(), 900u);
   for (TriangulationMethod m : kMethods) {
     double worst = 0.0;
     for (const Truth& t : truth) {
@@ -137,7 +137,10 @@ BruteForce brute_force_optimum(const Eigen::Matrix3d& E, const Eigen::Vector2d& 
     b.cost = (b.xl - xl0).squaredNorm() + (b.xr - xr0).squaredNorm();
     return b;
   };
-  const int n = 20000;
+  // The cost is unimodal over a wide range of t around its minimum (each term grows like the
+  // squared distance of a point from a line turning about the epipole), so a coarse scan brackets
+  // the minimum and a golden-section search pins it down.
+  const int n = 2000;
   const double pi = std::acos(-1.0);
   int best = 0;
   double best_cost = eval(0.0).cost;
@@ -148,13 +151,23 @@ BruteForce brute_force_optimum(const Eigen::Matrix3d& E, const Eigen::Vector2d& 
       best = i;
     }
   }
+  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
   double lo = pi * (best - 1) / n, hi = pi * (best + 1) / n;
-  for (int it = 0; it < 200; ++it) {
-    const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-    if (eval(m1).cost < eval(m2).cost) {
+  double m1 = hi - phi * (hi - lo), m2 = lo + phi * (hi - lo);
+  double c1 = eval(m1).cost, c2 = eval(m2).cost;
+  for (int it = 0; it < 90; ++it) {
+    if (c1 < c2) {
       hi = m2;
+      m2 = m1;
+      c2 = c1;
+      m1 = hi - phi * (hi - lo);
+      c1 = eval(m1).cost;
     } else {
       lo = m1;
+      m1 = m2;
+      c1 = c2;
+      m2 = lo + phi * (hi - lo);
+      c2 = eval(m2).cost;
     }
   }
   return eval(0.5 * (lo + hi));
@@ -248,15 +261,14 @@ TEST(Triangulation, DepthSigmaAgreesWithMonteCarloSpread) {
   const double sigma = 0.1;
   std::mt19937 rng(2016);
   std::normal_distribution<double> noise(0.0, sigma);
-  // Centre and edge of the valid area, near and far.
-  const std::array<Eigen::Vector3d, 4> points = {
-      Eigen::Vector3d(0.5, -0.3, 30.0), Eigen::Vector3d(14.0, 10.0, 30.0), Eigen::Vector3d(1.0, 2.0, 60.0),
-      Eigen::Vector3d(-25.0, 18.0, 60.0)};
+  // Centre near, edge far; 1200 trials each pin the spread down to ~2 %.
+  const std::array<Eigen::Vector3d, 2> points = {Eigen::Vector3d(0.5, -0.3, 30.0),
+                                                 Eigen::Vector3d(-25.0, 18.0, 60.0)};
   for (const Eigen::Vector3d& X : points) {
     const Eigen::Vector2d pl = rig.left.project(X), pr = rig.right.project(rig.R * X + rig.T);
     ASSERT_TRUE(rig.left.in_domain(pl));
     const double predicted = depth_sigma_mm(rig, X, sigma);
-    const int trials = 2000;
+    const int trials = 1200;
     double sum = 0.0, sum2 = 0.0, sum_reported = 0.0;
     int n = 0;
     for (int i = 0; i < trials; ++i) {

@@ -80,8 +80,9 @@ struct CorrectedPair {
   Eigen::Vector2d xl, xr;
 };
 
-// Lindstrom's niter2: the pair closest (L2 on the normalized image planes) to (xl, xr) that
-// satisfies xr^T E xl = 0, with E = rig.essential() = [T]x R.
+// Lindstrom's niter2: two closed-form update steps towards the pair closest (L2 on the normalized
+// image planes) to (xl, xr) that satisfies xr^T E xl = 0, with E = rig.essential() = [T]x R.
+// Its cost matches a brute-force optimum to ~1e-9 relative (tests/recon/test_triangulation.cpp).
 CorrectedPair niter2_correct(const Eigen::Matrix3d& E, const Eigen::Vector2d& xl, const Eigen::Vector2d& xr);
 
 // The intersection of two rays that satisfy the epipolar constraint: X = z (xl, 1) with z solving
