@@ -2,10 +2,13 @@
 #include "naneye/sim/capture.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <memory>
 #include <stdexcept>
 
 #include "log.hpp"
+#include "naneye/driver/neyd.hpp"
 #include "naneye/recon/calibration_io.hpp"
 
 namespace naneye::sim {
@@ -54,8 +57,6 @@ CaptureSummary write_capture(const CaptureOptions& o) {
   if (!preset)
     throw std::invalid_argument("sim: unknown preset '" + o.preset + "' (paper-d1, paper-d2, paper-d3)");
   if (o.pairs < 1) throw std::invalid_argument("sim: --pairs must be at least 1");
-  if (o.format != CaptureFormat::raw)
-    throw std::invalid_argument("sim: the .neyd format needs the driver's NeydWriter (not in this build)");
   const std::filesystem::path calib =
       o.calibration.empty() ? find_calibration(preset->calib_file) : o.calibration;
   const recon::StereoRig rig = recon::load_rig(calib);
@@ -75,10 +76,29 @@ CaptureSummary write_capture(const CaptureOptions& o) {
 
   std::filesystem::create_directories(o.out_dir);
   CaptureSummary sum;
-  sum.stream_file = o.out_dir / "capture.raw";
+  sum.stream_file = o.out_dir / (o.format == CaptureFormat::raw ? "capture.raw" : "capture.neyd");
   sum.truth_file = o.out_dir / "truth.json";
-  RawStreamWriter out(sum.stream_file, o.faults, o.seed ^ 0x9e3779b97f4a7c15ULL,
-                      static_cast<std::uint8_t>(rng()));
+  // Host arrival times are simulated too (a fixed origin plus sensor time plus the readout), so
+  // that the same seed gives the same bytes in either format.
+  constexpr std::int64_t kHostOrigin = 1'000'000'000, kReadoutNs = 2'000'000;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> raw(nullptr, &std::fclose);
+  std::unique_ptr<driver::NeydWriter> neyd;
+  ByteSink sink;
+  if (o.format == CaptureFormat::raw) {
+    raw.reset(std::fopen(sum.stream_file.c_str(), "wb"));
+    if (!raw) throw std::runtime_error("sim: cannot write " + sum.stream_file.string());
+    sink = [&](std::span<const std::uint8_t> b, std::int64_t) {
+      if (std::fwrite(b.data(), 1, b.size(), raw.get()) != b.size())
+        throw std::runtime_error("sim: write error on " + sum.stream_file.string());
+    };
+  } else {
+    driver::NeydHeader h;
+    h.start_monotonic_ns = kHostOrigin;
+    h.note = nlohmann::json{{"source", "naneye sim"}, {"preset", preset->name}, {"seed", o.seed}}.dump();
+    neyd = std::make_unique<driver::NeydWriter>(sum.stream_file.string(), h);
+    sink = [&](std::span<const std::uint8_t> b, std::int64_t host_ns) { neyd->write_chunk(b, host_ns); };
+  }
+  RecordWriter out(sink, o.faults, o.seed ^ 0x9e3779b97f4a7c15ULL, static_cast<std::uint8_t>(rng()));
 
   nlohmann::json truth;
   truth["square_mm"] = scene.board.square_mm;
@@ -110,14 +130,16 @@ CaptureSummary write_capture(const CaptureOptions& o) {
     sum.full += t.board_in_view;
 
     const PairTime pt = clock.next(rng);
+    const std::int64_t tl = ticks_to_ns(pt.left_ticks - start), tr = ticks_to_ns(pt.right_ticks - start);
     const RecordFate fl =
         out.write(driver::Sensor::left, static_cast<std::uint32_t>(pt.left_ticks),
-                  std::span<const std::uint16_t, driver::kPixelCount>(left.data(), driver::kPixelCount));
+                  std::span<const std::uint16_t, driver::kPixelCount>(left.data(), driver::kPixelCount),
+                  kHostOrigin + tl + kReadoutNs);
     const RecordFate fr =
         out.write(driver::Sensor::right, static_cast<std::uint32_t>(pt.right_ticks),
-                  std::span<const std::uint16_t, driver::kPixelCount>(right.data(), driver::kPixelCount));
-    nlohmann::json j =
-        truth_json(t, i, ticks_to_ns(pt.left_ticks - start), ticks_to_ns(pt.right_ticks - start));
+                  std::span<const std::uint16_t, driver::kPixelCount>(right.data(), driver::kPixelCount),
+                  kHostOrigin + tr + kReadoutNs);
+    nlohmann::json j = truth_json(t, i, tl, tr);
     j["t_left_ticks"] = static_cast<std::uint32_t>(pt.left_ticks);
     j["t_right_ticks"] = static_cast<std::uint32_t>(pt.right_ticks);
     if (o.faults.any()) {
@@ -129,6 +151,9 @@ CaptureSummary write_capture(const CaptureOptions& o) {
     truth["pairs"].push_back(std::move(j));
   }
   sum.bytes = out.finish();
+  if (raw && std::fclose(raw.release()) != 0)
+    throw std::runtime_error("sim: cannot close " + sum.stream_file.string());
+  if (neyd) neyd->close();
   sum.pairs = o.pairs;
   if (o.faults.any()) {
     truth["faults"] = {{"bit_flip_rate", o.faults.bit_flip_rate},
@@ -136,8 +161,16 @@ CaptureSummary write_capture(const CaptureOptions& o) {
                        {"lost_record_rate", o.faults.lost_record_rate},
                        {"truncate_tail", o.faults.truncate_tail}};
   }
+  // One pair per line: diffable, and small enough to bundle.
   std::ofstream tf(sum.truth_file);
-  tf << truth.dump(1) << "\n";
+  nlohmann::json head = truth;
+  head.erase("pairs");
+  std::string h = head.dump();
+  h.pop_back();  // reopen the object to append the pairs
+  tf << h << ",\n\"pairs\": [\n";
+  for (std::size_t i = 0; i < truth["pairs"].size(); ++i)
+    tf << truth["pairs"][i].dump() << (i + 1 < truth["pairs"].size() ? ",\n" : "\n");
+  tf << "]}\n";
   if (!tf) throw std::runtime_error("sim: cannot write " + sum.truth_file.string());
   log()->info("{}: {} pairs ({} full, {} partial, {} absent), {} bytes", sum.stream_file.string(), sum.pairs,
               sum.full, sum.partial, sum.absent, sum.bytes);

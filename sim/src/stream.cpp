@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <system_error>
 
 namespace naneye::sim {
 
@@ -29,20 +28,19 @@ PairTime FrameClock::next(Rng& rng) {
   return t;
 }
 
-RawStreamWriter::RawStreamWriter(const std::filesystem::path& file, const FaultSettings& faults,
-                                 std::uint64_t fault_seed, std::uint8_t first_seq)
-    : faults_(faults), rng_(fault_seed), seq_(first_seq), path_(file) {
-  f_ = std::fopen(file.c_str(), "wb");
-  if (!f_) throw std::system_error(errno, std::generic_category(), "sim: cannot write " + file.string());
-  record_.resize(driver::kRecordSize);
+RecordWriter::RecordWriter(ByteSink sink, const FaultSettings& faults, std::uint64_t fault_seed,
+                           std::uint8_t first_seq, std::size_t chunk_bytes)
+    : sink_(std::move(sink)),
+      faults_(faults),
+      rng_(fault_seed),
+      seq_(first_seq),
+      chunk_(std::max<std::size_t>(1, chunk_bytes)) {
+  record_.reserve(driver::kRecordSize);
+  held_.reserve(driver::kRecordSize);
 }
 
-RawStreamWriter::~RawStreamWriter() {
-  if (f_) std::fclose(f_);
-}
-
-RecordFate RawStreamWriter::write(driver::Sensor sensor, std::uint32_t ticks,
-                                  std::span<const std::uint16_t, driver::kPixelCount> px) {
+RecordFate RecordWriter::write(driver::Sensor sensor, std::uint32_t ticks,
+                               std::span<const std::uint16_t, driver::kPixelCount> px, std::int64_t host_ns) {
   RecordFate fate;
   const driver::RecordHeader h{seq_++, sensor, ticks};  // a lost record still used its seq upstream
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -50,14 +48,14 @@ RecordFate RawStreamWriter::write(driver::Sensor sensor, std::uint32_t ticks,
     fate.lost = true;
     return fate;
   }
+  record_.resize(driver::kRecordSize);
   driver::encode_record(h, px,
                         std::span<std::uint8_t, driver::kRecordSize>(record_.data(), driver::kRecordSize));
-  std::size_t size = record_.size();
   // Damage by geometric gaps between events: one draw per event instead of one per byte.
   auto gaps = [&](double rate, auto&& hit) {
     if (rate <= 0) return;
     std::geometric_distribution<std::size_t> gap(rate);
-    for (std::size_t i = gap(rng_); i < size; i += 1 + gap(rng_)) hit(i);
+    for (std::size_t i = gap(rng_); i < record_.size(); i += 1 + gap(rng_)) hit(i);
   };
   gaps(faults_.bit_flip_rate, [&](std::size_t i) {
     record_[i] ^= static_cast<std::uint8_t>(1u << (rng_() % 8));
@@ -65,25 +63,28 @@ RecordFate RawStreamWriter::write(driver::Sensor sensor, std::uint32_t ticks,
   });
   gaps(faults_.dropped_byte_rate, [&](std::size_t i) {
     record_.erase(record_.begin() + static_cast<std::ptrdiff_t>(i));
-    --size;
     ++fate.dropped_bytes;
   });
-  if (std::fwrite(record_.data(), 1, size, f_) != size)
-    throw std::system_error(errno, std::generic_category(), "sim: write to " + path_.string());
-  written_ += size;
-  record_.resize(driver::kRecordSize);
+  flush();
+  held_.swap(record_);
+  held_ns_ = host_ns;
+  holding_ = true;
   return fate;
 }
 
-std::uint64_t RawStreamWriter::finish() {
-  if (!f_) return written_;
-  if (std::fclose(f_) != 0)
-    throw std::system_error(errno, std::generic_category(), "sim: close " + path_.string());
-  f_ = nullptr;
-  if (faults_.truncate_tail > 0) {
-    written_ -= std::min<std::uint64_t>(written_, faults_.truncate_tail);
-    std::filesystem::resize_file(path_, written_);
+void RecordWriter::flush() {
+  if (!holding_) return;
+  for (std::size_t at = 0; at < held_.size(); at += chunk_) {
+    const std::size_t n = std::min(chunk_, held_.size() - at);
+    sink_(std::span<const std::uint8_t>(held_.data() + at, n), held_ns_);
   }
+  written_ += held_.size();
+  holding_ = false;
+}
+
+std::uint64_t RecordWriter::finish() {
+  if (holding_) held_.resize(held_.size() - std::min(held_.size(), faults_.truncate_tail));
+  flush();
   return written_;
 }
 

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -46,7 +47,7 @@ struct FaultSettings {
   double bit_flip_rate = 0;       // probability per byte of one flipped bit
   double dropped_byte_rate = 0;   // probability per byte of the byte going missing
   double lost_record_rate = 0;    // probability per record of the record never arriving (seq still advances)
-  std::size_t truncate_tail = 0;  // bytes cut off the end of the stream
+  std::size_t truncate_tail = 0;  // bytes cut off the end of the stream (at most the last record)
   bool any() const {
     return bit_flip_rate > 0 || dropped_byte_rate > 0 || lost_record_rate > 0 || truncate_tail > 0;
   }
@@ -58,28 +59,33 @@ struct RecordFate {
   std::uint32_t bit_flips = 0, dropped_bytes = 0;
 };
 
-// Writes records in the spec's format (.raw: the bulk-IN bytes, nothing added) to a file.
-class RawStreamWriter {
- public:
-  RawStreamWriter(const std::filesystem::path& file, const FaultSettings& faults, std::uint64_t fault_seed,
-                  std::uint8_t first_seq = 0);
-  ~RawStreamWriter();
-  RawStreamWriter(const RawStreamWriter&) = delete;
-  RawStreamWriter& operator=(const RawStreamWriter&) = delete;
+// Where the bytes go: a .raw file, a .neyd container, a source's parser. Called with each piece as
+// a USB transfer would deliver it, and the (simulated) host time it arrived.
+using ByteSink = std::function<void(std::span<const std::uint8_t> bytes, std::int64_t host_ns)>;
 
+// Encodes records in the spec's format, applies the faults, and hands the bytes to a sink in pieces
+// of `chunk_bytes` (a bulk transfer's worth). The last record is held back until finish() so that a
+// truncated tail (at most one record's worth) can be cut from it.
+class RecordWriter {
+ public:
+  RecordWriter(ByteSink sink, const FaultSettings& faults, std::uint64_t fault_seed,
+               std::uint8_t first_seq = 0, std::size_t chunk_bytes = 16384);
   RecordFate write(driver::Sensor sensor, std::uint32_t ticks,
-                   std::span<const std::uint16_t, driver::kPixelCount> px);
-  // Applies the truncated tail and closes; returns the bytes in the file.
+                   std::span<const std::uint16_t, driver::kPixelCount> px, std::int64_t host_ns);
+  // Flushes the held record (minus the truncated tail); returns the bytes handed over in all.
   std::uint64_t finish();
 
  private:
-  std::FILE* f_ = nullptr;
+  void flush();
+  ByteSink sink_;
   FaultSettings faults_;
   Rng rng_;
   std::uint8_t seq_;
+  std::size_t chunk_;
   std::uint64_t written_ = 0;
-  std::vector<std::uint8_t> record_;
-  std::filesystem::path path_;
+  std::vector<std::uint8_t> record_, held_;
+  std::int64_t held_ns_ = 0;
+  bool holding_ = false;
 };
 
 }  // namespace naneye::sim
