@@ -107,6 +107,28 @@ TEST(Capture, DriverParsesAndPairsItAsTheTruthSays) {
   EXPECT_GT(pairs[0]->left.ticks, pairs[5]->left.ticks) << "expected the tick counter to wrap";
 }
 
+TEST(Capture, FreeRunningClocksDriftWithinTheSensorsRange) {
+  Rng rng(21);
+  FrameClock clock(TimingSettings{}, 0, rng);
+  PairTime prev = clock.next(rng);
+  double lo = 1e9, hi = 0, lag_lo = 1e9, lag_hi = 0;
+  for (int i = 0; i < 3000; ++i) {  // one minute of frames
+    const PairTime t = clock.next(rng);
+    const double fps =
+        static_cast<double>(driver::kTickHz) / static_cast<double>(t.left_ticks - prev.left_ticks);
+    const double lag_ms = 1e3 * static_cast<double>(t.right_ticks - t.left_ticks) / driver::kTickHz;
+    lo = std::min(lo, fps), hi = std::max(hi, fps);
+    lag_lo = std::min(lag_lo, lag_ms), lag_hi = std::max(lag_hi, lag_ms);
+    ASSERT_LT(lag_ms, 0.5e3 / fps);  // under half a period: pairing by nearest timestamp is unambiguous
+    prev = t;
+  }
+  EXPECT_GE(lo, 43.0 - 1e-3);
+  EXPECT_LE(hi, 62.0 + 1e-3);
+  EXPECT_GT(hi - lo, 3.0);  // it does drift
+  EXPECT_GE(lag_lo, 0.5 - 1e-3);
+  EXPECT_GT(lag_hi - lag_lo, 0.3);
+}
+
 TEST(Capture, NeydHoldsTheSamePairsAsRaw) {
   TempDir r, n;
   CaptureOptions o = small(r.path, 3, 4);

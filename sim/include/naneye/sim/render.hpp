@@ -83,16 +83,18 @@ class Renderer {
  private:
   // Exact rays (CameraModel::undistort) where the renderer needs them, computed once per camera.
   struct RayTable {
-    std::vector<double> corner;    // (250 + 1)^2 pixel corners, (x, y) normalized; NaN beyond the fold
-    std::vector<float> centre;     // per pixel: its centre's ray (mean valid sub-sample ray at the fold)
-    std::vector<float> cos4;       // per pixel: cos^4 of that ray's angle to the axis (0: no ray)
-    std::vector<int> fold_pixels;  // pixels with a corner beyond the fold ...
-    std::vector<float> fold_rays;  // ... and their sub-sample rays, kFoldSamplesPerSide^2 each, NaN beyond
+    std::vector<double> corner;       // (250 + 1)^2 pixel corners, (x, y) normalized; NaN beyond the fold
+    std::vector<float> centre;        // per pixel: its centre's ray (mean valid sub-sample ray at the fold)
+    std::vector<float> cos4;          // per pixel: cos^4 of that ray's angle to the axis (0: no ray)
+    std::vector<int> fold_pixels;     // pixels with a corner beyond (or too near) the fold ...
+    std::vector<std::uint8_t> exact;  // per pixel: 1 for the fold pixels
+    std::vector<float> fold_rays;     // ... and their sub-sample rays, kFoldSamplesPerSide^2 each, NaN beyond
   };
   struct Bilinear {
     double w00, w01, w10, w11;
   };
-  static constexpr int kFoldSamplesPerSide = 4;
+  static constexpr int kFoldSamplesPerSide = 8;
+  static constexpr double kMaxInterpolationErrorPx = 1e-3;
   static RayTable build_rays(const recon::CameraModel& cam);
   void irradiance_into(Eye eye, const Pose& board, bool present, Scratch& scratch, float* out) const;
   void sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* out) const;
