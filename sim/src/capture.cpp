@@ -64,6 +64,7 @@ CaptureSummary write_capture(const CaptureOptions& o) {
   SceneSettings scene = preset_scene(*preset);
   SensorSettings sensor = o.noise_free ? SensorSettings::ideal() : SensorSettings{};
   if (o.noise_free) scene.lighting = false;
+  if (o.supersample > 0) scene.supersample = o.supersample;
   sensor.bayer = o.bayer;
   const Renderer renderer(rig, scene, sensor);
 

@@ -189,19 +189,21 @@ void Renderer::irradiance_into(Eye eye, const Pose& board, bool present, Scratch
   const View view = make_view(rig_, eye, board, scene_);
   const Pattern pattern(scene_);
   const Eigen::Matrix3d& H = view.ray_to_board;
+  // Plain numbers for the inner loops (unoptimised builds would call an accessor per coefficient).
+  const double h00 = H(0, 0), h01 = H(0, 1), h02 = H(0, 2), h10 = H(1, 0), h11 = H(1, 1), h12 = H(1, 2),
+               h20 = H(2, 0), h21 = H(2, 1), h22 = H(2, 2);
   // Board value of a ray: reflectance, or < 0 for the background (missed, behind, or off the board).
   auto value = [&](double x, double y) {
-    const double w = H(2, 0) * x + H(2, 1) * y + H(2, 2);
+    const double w = h20 * x + h21 * y + h22;
     if (!present || !(w > 0.0)) return -1.0;
     const double iw = 1.0 / w;
-    return pattern((H(0, 0) * x + H(0, 1) * y + H(0, 2)) * iw, (H(1, 0) * x + H(1, 1) * y + H(1, 2)) * iw);
+    return pattern((h00 * x + h01 * y + h02) * iw, (h10 * x + h11 * y + h12) * iw);
   };
   auto cell = [&](double x, double y) {
-    const double w = H(2, 0) * x + H(2, 1) * y + H(2, 2);
+    const double w = h20 * x + h21 * y + h22;
     if (!present || !(w > 0.0)) return Pattern::kBackground;
     const double iw = 1.0 / w;
-    return pattern.cell((H(0, 0) * x + H(0, 1) * y + H(0, 2)) * iw,
-                        (H(1, 0) * x + H(1, 1) * y + H(1, 2)) * iw);
+    return pattern.cell((h00 * x + h01 * y + h02) * iw, (h10 * x + h11 * y + h12) * iw);
   };
   // Per frame: the region of every pixel corner. Uniform pixels need nothing else.
   std::vector<int>& cells = scratch.cells;

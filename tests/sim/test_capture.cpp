@@ -60,6 +60,7 @@ CaptureOptions small(const fs::path& dir, int pairs, std::uint64_t seed) {
   o.pairs = pairs;
   o.seed = seed;
   o.out_dir = dir;
+  o.supersample = 4;  // these tests check bytes, times and truth, not edge accuracy: keep them quick
   return o;
 }
 

@@ -26,6 +26,7 @@ struct CaptureOptions {
   double absent_share = 0.05;  // pairs without a board
   TimingSettings timing;
   FaultSettings faults;
+  int supersample = 0;            // edge samples per pixel side; 0: SceneSettings' default
   std::int64_t start_ticks = -1;  // first left timestamp; < 0: drawn from the seed
 };
 

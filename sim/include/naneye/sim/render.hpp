@@ -63,7 +63,7 @@ class Renderer {
 
   // Working images reused from frame to frame by render_into (one per rendering thread).
   struct Scratch {
-    cv::Mat light, blurred;
+    cv::Mat light, blurred, noise;
     std::vector<int> cells;
     std::vector<float> board_part, background_part;
   };
@@ -94,7 +94,7 @@ class Renderer {
     double w00, w01, w10, w11;
   };
   static constexpr int kFoldSamplesPerSide = 8;
-  static constexpr double kMaxInterpolationErrorPx = 1e-3;
+  static constexpr double kMaxInterpolationErrorPx = 5e-3;
   static RayTable build_rays(const recon::CameraModel& cam);
   void irradiance_into(Eye eye, const Pose& board, bool present, Scratch& scratch, float* out) const;
   void sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* out) const;
