@@ -66,11 +66,11 @@ CaptureOptions small(const fs::path& dir, int pairs, std::uint64_t seed) {
 
 TEST(Capture, SameSeedGivesTheSameBytes) {
   TempDir a, b, c;
-  write_capture(small(a.path, 3, 5));
-  write_capture(small(b.path, 3, 5));
-  write_capture(small(c.path, 3, 6));
+  write_capture(small(a.path, 2, 5));
+  write_capture(small(b.path, 2, 5));
+  write_capture(small(c.path, 2, 6));
   const auto ra = bytes_of(a.path / "capture.raw");
-  EXPECT_EQ(ra.size(), 6 * driver::kRecordSize);
+  EXPECT_EQ(ra.size(), 4 * driver::kRecordSize);
   EXPECT_EQ(ra, bytes_of(b.path / "capture.raw"));
   EXPECT_EQ(bytes_of(a.path / "truth.json"), bytes_of(b.path / "truth.json"));
   EXPECT_NE(ra, bytes_of(c.path / "capture.raw"));

@@ -73,7 +73,7 @@ TEST(Render, IdealRenderPutsEveryCornerWhereTheModelProjectsIt) {
     ps.margin_px = 10;
     Rng rng(11);
     double worst = 0;
-    for (int trial = 0; trial < 8; ++trial) {
+    for (int trial = 0; trial < 6; ++trial) {
       const Pose sampled = sample_full_pose(rig, scene.board, ps, rng);
       const int k = static_cast<int>(rng() % scene.board.inner_count());
       const Eye eye = trial % 2 == 0 ? Eye::left : Eye::right;
