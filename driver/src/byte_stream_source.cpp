@@ -33,7 +33,11 @@ class ByteStreamSource::Channel : public PairChannel {
 class ByteStreamSource::TimingSink : public FrameSink {
  public:
   explicit TimingSink(ByteStreamSource& s) : s_(s) {}
-  Frame* begin_frame(const RecordHeader& h) override { return s_.pairer_->begin_frame(h); }
+  Frame* begin_frame(const RecordHeader& h) override {
+    Frame* f = s_.pairer_->begin_frame(h);
+    if (f) s_.on_record_start(f->sensor_ns);
+    return f;
+  }
   void commit_frame(Frame& f) override {
     s_.last_sensor_ns_ = f.sensor_ns;
     s_.records_.fetch_add(1, std::memory_order_relaxed);
@@ -103,7 +107,7 @@ void ByteStreamSource::thread_main() {
 }
 
 void ByteStreamSource::stop() {
-  stop_.store(true, std::memory_order_release);
+  stop_.store(true, std::memory_order_seq_cst);
   interrupt();
   ring_.wake_producer();
   { std::lock_guard lock(sleep_mutex_); }

@@ -55,17 +55,11 @@ bool FileSource::play_raw() {
   std::ifstream f(options_.path, std::ios::binary);
   if (!f) throw SourceError(options_.path + ": cannot open: " + std::strerror(errno));
   std::vector<std::uint8_t> buf(options_.chunk_bytes);
-  std::uint64_t seen = records_committed();
   while (!stopping()) {
     f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
     const auto n = static_cast<std::size_t>(f.gcount());
     if (n == 0) break;
-    feed(std::span(buf).first(n), monotonic_ns());
-    // .raw has no arrival times: a record is due at its own sensor timestamp.
-    if (records_committed() != seen) {
-      seen = records_committed();
-      if (!pace(last_sensor_ns())) return false;
-    }
+    feed(std::span(buf).first(n), monotonic_ns());  // paced per record in on_record_start()
   }
   return !stopping();
 }
@@ -79,6 +73,11 @@ bool FileSource::play_neyd() {
     feed(data, monotonic_ns());
   }
   return !stopping();
+}
+
+// .raw has no arrival times: each record is released when its own sensor timestamp is due.
+void FileSource::on_record_start(std::int64_t sensor_ns) {
+  if (!neyd_) pace(sensor_ns);
 }
 
 void FileSource::run() {

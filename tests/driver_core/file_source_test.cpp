@@ -134,6 +134,20 @@ TEST(FileSource, LoopRunsUntilStoppedWithTimeMovingForward) {
   EXPECT_EQ(s->counters().unpaired, 0u);
 }
 
+TEST(FileSource, StopReleasesAProducerBlockedOnAFullRing) {
+  test::TempFile f("blocked.raw");
+  f.write(test::build(test::alternating(20)));
+  auto s = open_started("file://" + f.str() + "?speed=max");
+  while (s->counters().pairs < 4) std::this_thread::sleep_for(1ms);  // ring full: the producer waits
+  std::this_thread::sleep_for(20ms);
+  EXPECT_EQ(s->counters().pairs, 4u);
+  EXPECT_EQ(s->state(), SourceState::streaming);
+  s->stop();
+  EXPECT_EQ(s->state(), SourceState::stopped);
+  EXPECT_EQ(drain(*s).pairs.size(), 4u);  // what was handed over stays available
+  EXPECT_EQ(s->counters().pairs_dropped, 0u);
+}
+
 TEST(Recorder, RecordThenReplayIsBitExact) {
   test::TempFile raw("rec.raw"), neyd("rec.neyd");
   auto recs = test::alternating(8, 250, 0xFFFFFFFFu - 3'000'000);

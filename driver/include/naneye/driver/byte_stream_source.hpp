@@ -55,6 +55,9 @@ class ByteStreamSource : public FrameSource {
   virtual void open() {}       // on the caller's thread inside start(); throw SourceError on failure
   virtual void run() = 0;      // the capture thread: return at end of data, or soon after stopping()
   virtual void interrupt() {}  // from stop(), any thread: unblock run() (e.g. cancel transfers)
+  // A record with this sensor time (ns, 64-bit timeline) starts being unpacked, on the capture
+  // thread; replay paces .raw files here so each record completes at its own time.
+  virtual void on_record_start(std::int64_t sensor_ns) { (void)sensor_ns; }
 
   // For run():
   void feed(std::span<const std::uint8_t> bytes, std::int64_t host_ns);  // one transfer as received

@@ -24,6 +24,7 @@ class FileSource : public ByteStreamSource {
  protected:
   void open() override;
   void run() override;
+  void on_record_start(std::int64_t sensor_ns) override;
 
  private:
   bool play_raw();                      // one pass; false when stopped
