@@ -15,7 +15,7 @@
 
 #include "commands.hpp"
 #include "naneye/driver/recorder.hpp"
-#include "naneye/driver/source_registry.hpp"
+#include "registry.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -73,7 +73,7 @@ struct RecordOptions {
 };
 
 void run_record(const RecordOptions& o) {
-  auto registry = driver::make_default_registry();
+  auto registry = make_registry();
   auto source = registry.open(o.uri);
   SignalWatch signals;  // before start(): the capture thread inherits the blocked mask
   const driver::RecordSummary s = driver::record_to_neyd(
@@ -111,7 +111,7 @@ void run_replay(const ReplayOptions& o) {
   // A plain path replays as fast as possible, losslessly; a URI keeps its own parameters.
   const std::string uri =
       o.file.find("://") == std::string::npos ? "file://" + o.file + "?speed=max" : o.file;
-  auto source = driver::make_default_registry().open(uri);
+  auto source = make_registry().open(uri);
   source->start();
   Series left, right;
   double off_sum = 0;
