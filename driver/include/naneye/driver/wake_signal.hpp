@@ -1,0 +1,48 @@
+#pragma once
+// WakeSignal: lets a thread sleep until a lock-free condition becomes true, without putting a lock on
+// the fast path. The signalling side publishes its change (release store), then calls notify(),
+// which costs one fence and one relaxed load when nobody waits. Waiters re-check their predicate at
+// least every 20 ms, so even a missed wake-up can only delay, never hang.
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+
+namespace naneye::driver {
+
+class WakeSignal {
+ public:
+  void notify() {
+    // Pairs with the fence in wait_until(): either the waiter sees the published change or we see
+    // the waiter (store-load ordering needs a full fence on both sides).
+    std::atomic_thread_fence(std::memory_order_seq_cst);
+    if (waiters_.load(std::memory_order_relaxed) == 0) return;
+    { std::lock_guard lock(mutex_); }
+    cv_.notify_all();
+  }
+
+  // Returns pred() as last evaluated: false means the deadline passed first.
+  template <class Pred>
+  bool wait_until(Pred pred, std::chrono::steady_clock::time_point deadline) {
+    if (pred()) return true;
+    std::unique_lock lock(mutex_);
+    waiters_.fetch_add(1, std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_seq_cst);
+    bool ok = pred();
+    while (!ok) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now >= deadline) break;
+      cv_.wait_until(lock, std::min(deadline, now + std::chrono::milliseconds(20)));
+      ok = pred();
+    }
+    waiters_.fetch_sub(1, std::memory_order_relaxed);
+    return ok;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::atomic<int> waiters_{0};
+};
+
+}  // namespace naneye::driver
