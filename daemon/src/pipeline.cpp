@@ -193,9 +193,10 @@ void Pipeline::handle(driver::PairPtr pair) {
 
   // Sensor frame rates from the sensors' own clocks (an exponential average of the periods).
   auto update_fps = [](std::int64_t now, std::int64_t& last, std::atomic<double>& fps) {
-    const std::int64_t dt = now - last;
+    const bool first = last == kNoTime;
+    const std::int64_t dt = first ? 0 : now - last;
     last = now;
-    if (dt <= 0 || dt > 1'000'000'000) return;
+    if (first || dt <= 0 || dt > 1'000'000'000) return;
     const double inst = 1e9 / static_cast<double>(dt);
     const double old = fps.load(std::memory_order_relaxed);
     fps.store(old == 0 ? inst : 0.9 * old + 0.1 * inst, std::memory_order_relaxed);

@@ -129,7 +129,8 @@ class Pipeline {
   std::atomic<double> fps_left_{0}, fps_right_{0};
   std::atomic<std::int64_t> offset_ns_{0};
   std::atomic<bool> waiting_{false};
-  std::int64_t last_left_ns_ = 0, last_right_ns_ = 0, last_frames_ns_ = 0;  // worker only
+  static constexpr std::int64_t kNoTime = INT64_MIN;
+  std::int64_t last_left_ns_ = kNoTime, last_right_ns_ = kNoTime, last_frames_ns_ = 0;  // worker only
   LatencyRecorder recon_latency_, capture_latency_;
 };
 
