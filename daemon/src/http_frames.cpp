@@ -1,9 +1,9 @@
 // /v1/frames/left.png and right.png: the latest frames, 10-bit -> 8-bit, optionally with the
 // detected corners drawn.
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "http_internal.hpp"
+#include "png_encode.hpp"
 
 namespace naneye::daemon::http {
 namespace {
@@ -44,7 +44,7 @@ void frame_route(httplib::Server& svr, HttpContext& ctx, const char* path, bool 
       }
     }
     std::vector<std::uint8_t> png;
-    if (!cv::imencode(".png", img, png)) return send_error(res, 500, "encode_failed", "PNG encoding failed");
+    if (!encode_png(img, png)) return send_error(res, 500, "encode_failed", "PNG encoding failed");
     res.set_header("X-Naneye-Pair", std::to_string(pair));
     res.set_content(std::string(png.begin(), png.end()), "image/png");
   });

@@ -87,6 +87,9 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   server_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
   // Short idle keep-alive so that shutdown is not held by an idle client for long.
   server_->set_keep_alive_timeout(1);
+  // Headers and body go out in separate writes: without TCP_NODELAY, Nagle waits for the client's
+  // delayed ACK (tens of ms) before sending the body.
+  server_->set_tcp_nodelay(true);
   server_->set_read_timeout(5, 0);
   server_->set_write_timeout(2, 0);
   http::add_status_routes(*server_, *ctx_);

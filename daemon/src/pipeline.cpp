@@ -191,18 +191,21 @@ void Pipeline::handle(driver::PairPtr pair) {
     capture_latency_.record(since_capture);
   }
 
-  // Sensor frame rates from the sensors' own clocks (an exponential average of the periods).
-  auto update_fps = [](std::int64_t now, std::int64_t& last, std::atomic<double>& fps) {
-    const bool first = last == kNoTime;
-    const std::int64_t dt = first ? 0 : now - last;
-    last = now;
-    if (first || dt <= 0 || dt > 1'000'000'000) return;
-    const double inst = 1e9 / static_cast<double>(dt);
-    const double old = fps.load(std::memory_order_relaxed);
-    fps.store(old == 0 ? inst : 0.9 * old + 0.1 * inst, std::memory_order_relaxed);
+  // Sensor frame rates from the sensors' own clocks: an exponential average of the frame period.
+  // A period far above the average is a gap (a lost record, a replay looping), not a rate change,
+  // unless it persists.
+  auto update_fps = [](std::int64_t now, PeriodEstimate& e, std::atomic<double>& fps) {
+    const bool first = e.last == kNoTime;
+    const auto dt = static_cast<double>(first ? 0 : now - e.last);
+    e.last = now;
+    if (first || dt <= 0 || dt > 1e9) return;
+    if (e.period > 0 && dt > 1.5 * e.period && ++e.rejected < 8) return;
+    e.rejected = 0;
+    e.period = e.period == 0 ? dt : 0.9 * e.period + 0.1 * dt;
+    fps.store(1e9 / e.period, std::memory_order_relaxed);
   };
-  update_fps(pair->left.sensor_ns, last_left_ns_, fps_left_);
-  update_fps(pair->right.sensor_ns, last_right_ns_, fps_right_);
+  update_fps(pair->left.sensor_ns, left_period_, fps_left_);
+  update_fps(pair->right.sensor_ns, right_period_, fps_right_);
   offset_ns_.store(pair->offset_ns(), std::memory_order_relaxed);
 
   const std::int64_t interval = std::int64_t{settings_.frame_snapshot_interval_ms} * 1'000'000;

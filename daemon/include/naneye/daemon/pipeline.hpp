@@ -130,7 +130,13 @@ class Pipeline {
   std::atomic<std::int64_t> offset_ns_{0};
   std::atomic<bool> waiting_{false};
   static constexpr std::int64_t kNoTime = INT64_MIN;
-  std::int64_t last_left_ns_ = kNoTime, last_right_ns_ = kNoTime, last_frames_ns_ = 0;  // worker only
+  struct PeriodEstimate {
+    std::int64_t last = kNoTime;
+    double period = 0;  // ns
+    int rejected = 0;
+  };
+  PeriodEstimate left_period_, right_period_;  // worker only
+  std::int64_t last_frames_ns_ = 0;            // worker only
   LatencyRecorder recon_latency_, capture_latency_;
 };
 
