@@ -103,7 +103,7 @@ void ByteStreamSource::thread_main() {
 }
 
 void ByteStreamSource::stop() {
-  stop_.store(true, std::memory_order_release);
+  stop_.store(true, std::memory_order_seq_cst);
   interrupt();
   ring_.wake_producer();
   { std::lock_guard lock(sleep_mutex_); }

@@ -22,7 +22,7 @@ PairPtr PairPool::try_acquire() {
   if (free_.empty()) return PairPtr(nullptr, PairReturn{this, &PairPool::give_back});
   StereoPair* p = free_.back();
   free_.pop_back();
-  free_count_.store(free_.size(), std::memory_order_release);
+  free_count_.store(free_.size(), std::memory_order_seq_cst);
   return PairPtr(p, PairReturn{this, &PairPool::give_back});
 }
 
@@ -32,8 +32,8 @@ PairPtr PairPool::acquire_until(std::chrono::steady_clock::time_point deadline,
   while (!p) {
     const bool woke = released_.wait_until(
         [&] {
-          return free_count_.load(std::memory_order_acquire) > 0 ||
-                 (stop && stop->load(std::memory_order_acquire));
+          return free_count_.load(std::memory_order_seq_cst) > 0 ||
+                 (stop && stop->load(std::memory_order_seq_cst));
         },
         deadline);
     if (!woke || (stop && stop->load(std::memory_order_acquire))) return p;
@@ -55,7 +55,7 @@ void PairPool::release(StereoPair* pair) {
   {
     std::lock_guard lock(mutex_);
     free_.push_back(pair);  // never reallocates: at most capacity_ buffers exist
-    free_count_.store(free_.size(), std::memory_order_release);
+    free_count_.store(free_.size(), std::memory_order_seq_cst);
   }
   released_.notify();
 }

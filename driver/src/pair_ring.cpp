@@ -29,7 +29,7 @@ bool PairRing::drop_oldest() {
   const std::uint64_t t = tail_.load(std::memory_order_relaxed);  // only this (producer) thread writes tail_
   while (h != t) {
     StereoPair* p = slot(h).load(std::memory_order_acquire);
-    if (head_.compare_exchange_weak(h, h + 1, std::memory_order_acq_rel, std::memory_order_acquire)) {
+    if (head_.compare_exchange_weak(h, h + 1, std::memory_order_seq_cst, std::memory_order_acquire)) {
       // Slot h is ours now; it cannot be refilled before we write tail_ again.
       dropped_.fetch_add(1, std::memory_order_relaxed);
       PairPtr gone(p, deleter_);
@@ -49,15 +49,15 @@ bool PairRing::push(PairPtr pair, const std::atomic<bool>* stop) {
     } else {
       const bool room = room_.wait_until(
           [&] {
-            return t - head_.load(std::memory_order_acquire) < capacity_ || closed() ||
-                   (stop && stop->load(std::memory_order_acquire));
+            return t - head_.load(std::memory_order_seq_cst) < capacity_ || closed() ||
+                   (stop && stop->load(std::memory_order_seq_cst));
           },
           std::chrono::steady_clock::time_point::max());
       if (!room || closed() || t - head_.load(std::memory_order_acquire) >= capacity_) return false;
     }
   }
   slot(t).store(pair.release(), std::memory_order_release);
-  tail_.store(t + 1, std::memory_order_release);
+  tail_.store(t + 1, std::memory_order_seq_cst);  // seq_cst: see WakeSignal
   data_.notify();
   return true;
 }
@@ -66,7 +66,7 @@ PairPtr PairRing::try_pop() {
   std::uint64_t h = head_.load(std::memory_order_acquire);
   while (h != tail_.load(std::memory_order_acquire)) {
     StereoPair* p = slot(h).load(std::memory_order_acquire);
-    if (head_.compare_exchange_weak(h, h + 1, std::memory_order_acq_rel, std::memory_order_acquire)) {
+    if (head_.compare_exchange_weak(h, h + 1, std::memory_order_seq_cst, std::memory_order_acquire)) {
       if (policy_ == Policy::block) room_.notify();
       return PairPtr(p, deleter_);
     }
@@ -80,7 +80,7 @@ PairPtr PairRing::pop_until(std::chrono::steady_clock::time_point deadline) {
   while (!p) {
     const bool ready = data_.wait_until(
         [&] {
-          return tail_.load(std::memory_order_acquire) != head_.load(std::memory_order_acquire) || closed();
+          return tail_.load(std::memory_order_seq_cst) != head_.load(std::memory_order_seq_cst) || closed();
         },
         deadline);
     p = try_pop();
@@ -90,7 +90,7 @@ PairPtr PairRing::pop_until(std::chrono::steady_clock::time_point deadline) {
 }
 
 void PairRing::close() {
-  closed_.store(true, std::memory_order_release);
+  closed_.store(true, std::memory_order_seq_cst);
   data_.notify();
   room_.notify();
 }

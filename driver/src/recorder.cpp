@@ -97,7 +97,8 @@ RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const
     }
     ++sum.pairs;
     if (!sum.raw) {
-      const bool left_first = p->left.sensor_ns <= p->right.sensor_ns;
+      // Stream order is seq order (seq counts records across both sensors, modulo 256).
+      const bool left_first = static_cast<std::uint8_t>(p->right.seq - p->left.seq) < 128;
       const Frame* order[2] = {left_first ? &p->left : &p->right, left_first ? &p->right : &p->left};
       for (int i = 0; i < 2; ++i)
         encode_record(RecordHeader{order[i]->seq, order[i]->sensor, order[i]->ticks}, order[i]->pixels,

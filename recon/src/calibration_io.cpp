@@ -51,6 +51,12 @@ class Keys {
         if (node.isInt() || node.isReal()) {
           m = cv::Mat(1, 1, CV_64F, cv::Scalar(static_cast<double>(node)));
         } else if (node.isMap() && !node["data"].empty()) {
+          const int rows = static_cast<int>(node["rows"]), cols = static_cast<int>(node["cols"]);
+          const std::size_t given = node["data"].size();
+          if (rows < 1 || cols < 1 || given != static_cast<std::size_t>(rows) * cols)
+            fail(file, key,
+                 "data has " + std::to_string(given) + " values but rows x cols is " + std::to_string(rows) +
+                     "x" + std::to_string(cols));
           node >> m;
         } else {
           continue;  // strings, comments and other keys that are not ours

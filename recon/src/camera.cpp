@@ -98,6 +98,17 @@ Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& X) const {
   return to_pixel(distort(X.head<2>() / X.z()));
 }
 
+Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& X, Eigen::Matrix<double, 2, 3>& J) const {
+  const double iz = 1.0 / X.z();
+  const Eigen::Vector2d xn = X.head<2>() * iz;
+  Eigen::Matrix<double, 2, 3> dn;
+  dn << iz, 0.0, -xn.x() * iz, 0.0, iz, -xn.y() * iz;
+  Eigen::Matrix2d Kp;
+  Kp << fx(), skew(), 0.0, fy();
+  J = Kp * distort_jacobian(xn) * dn;
+  return to_pixel(distort(xn));
+}
+
 Undistorted CameraModel::undistort(const Eigen::Vector2d& px) const {
   return undistort_distorted(from_pixel(px));
 }

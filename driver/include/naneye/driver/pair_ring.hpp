@@ -46,7 +46,7 @@ class PairRing {
 
   // No more pushes; wakes the consumer, which drains what is left then gets nullptr at once.
   void close();
-  bool closed() const { return closed_.load(std::memory_order_acquire); }
+  bool closed() const { return closed_.load(std::memory_order_seq_cst); }
   // Wakes a producer blocked in push() (after the caller set its stop flag).
   void wake_producer() { room_.notify(); }
 

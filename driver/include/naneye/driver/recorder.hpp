@@ -1,7 +1,7 @@
 #pragma once
 // Records any FrameSource into a .neyd file. Byte-stream sources are tapped (RawTap): every transfer
 // is stored exactly as received, on the capture thread. Sources without raw bytes (a simulator) are
-// re-encoded: each pair becomes one chunk of two records (encode_record), earlier sensor first.
+// re-encoded: each pair becomes one chunk of two records (encode_record), in seq order.
 #include <atomic>
 #include <cstdint>
 #include <optional>

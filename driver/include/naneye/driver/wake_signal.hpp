@@ -1,8 +1,10 @@
 #pragma once
 // WakeSignal: lets a thread sleep until a lock-free condition becomes true, without putting a lock on
-// the fast path. The signalling side publishes its change (release store), then calls notify(),
-// which costs one fence and one relaxed load when nobody waits. Waiters re-check their predicate at
-// least every 20 ms, so even a missed wake-up can only delay, never hang.
+// the fast path. The signalling side publishes its change with a seq_cst store (or RMW), then calls
+// notify(), which costs one load when nobody waits; the waiter's predicate loads seq_cst too. That
+// is Dekker's pattern: in the single seq_cst order either the waiter sees the change or notify()
+// sees the waiter (no fences: ThreadSanitizer does not model them). Waiters also re-check their
+// predicate at least every 20 ms, so a wake-up lost to a bug could only delay, never hang.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -13,10 +15,7 @@ namespace naneye::driver {
 class WakeSignal {
  public:
   void notify() {
-    // Pairs with the fence in wait_until(): either the waiter sees the published change or we see
-    // the waiter (store-load ordering needs a full fence on both sides).
-    std::atomic_thread_fence(std::memory_order_seq_cst);
-    if (waiters_.load(std::memory_order_relaxed) == 0) return;
+    if (waiters_.load(std::memory_order_seq_cst) == 0) return;
     { std::lock_guard lock(mutex_); }
     cv_.notify_all();
   }
@@ -26,8 +25,7 @@ class WakeSignal {
   bool wait_until(Pred pred, std::chrono::steady_clock::time_point deadline) {
     if (pred()) return true;
     std::unique_lock lock(mutex_);
-    waiters_.fetch_add(1, std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_seq_cst);
+    waiters_.fetch_add(1, std::memory_order_seq_cst);
     bool ok = pred();
     while (!ok) {
       const auto now = std::chrono::steady_clock::now();

@@ -56,6 +56,8 @@ class CameraModel {
   Eigen::Vector2d from_pixel(const Eigen::Vector2d& px) const;
   // Paper Eq. 3-6: a 3D point in this camera's frame (Z > 0) -> raw pixel.
   Eigen::Vector2d project(const Eigen::Vector3d& X) const;
+  // project() and its 2x3 Jacobian d(pixel)/dX: K(2x2) * distort_jacobian * d(X/Z, Y/Z)/dX.
+  Eigen::Vector2d project(const Eigen::Vector3d& X, Eigen::Matrix<double, 2, 3>& J) const;
   // Raw pixel -> normalized, the exact inverse of distort(): Newton with the analytic Jacobian.
   // A pixel beyond the fold returns outside_model, never a number.
   Undistorted undistort(const Eigen::Vector2d& px) const;

@@ -13,11 +13,11 @@ inline constexpr int kMaxCorners = 64;  // the paper's boards have 6 x 8 = 48 in
 
 struct PointResult {
   int id = 0, row = 0, col = 0;
-  bool valid = false;                     // false: coordinates below are not to be used (null in JSON)
+  bool valid = false;  // false: coordinates below are not to be used (null in JSON)
   Eigen::Vector2d left_px{0, 0}, right_px{0, 0};  // raw pixels, centres at integers
-  Eigen::Vector3d xyz_mm{0, 0, 0};        // triangulated (niter2 + refinement), left camera frame
-  double depth_sigma_mm = 0;              // first-order, from the measured corner noise
-  Eigen::Vector3d xyz_board_mm{0, 0, 0};  // the corner on the fitted board
+  Eigen::Vector3d xyz_mm{0, 0, 0};                // triangulated (niter2 + refinement), left camera frame
+  double depth_sigma_mm = 0;                      // first-order, from the measured corner noise
+  Eigen::Vector3d xyz_board_mm{0, 0, 0};          // the corner on the fitted board
 };
 
 struct BoardResult {
@@ -29,9 +29,9 @@ struct BoardResult {
 };
 
 struct MetricsResult {
-  double planarity_mm = 0;         // P
-  double distance_error_mm = 0;    // D
-  double reprojection_px = 0;      // R
+  double planarity_mm = 0;       // P
+  double distance_error_mm = 0;  // D
+  double reprojection_px = 0;    // R
 };
 
 struct PairResult {
