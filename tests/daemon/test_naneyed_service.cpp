@@ -1,5 +1,6 @@
 // naneyed as a service: event streams, shutdown, reload, configuration checks.
 #include <atomic>
+#include <fstream>
 #include <sstream>
 
 #include "naneyed_fixture.hpp"
@@ -156,4 +157,34 @@ TEST_F(NaneyedTest, CheckConfigValidatesAndFlagsOverride) {
                          dir.path / "calib.log");
   EXPECT_EQ(no_calib.wait_exit(), 1);
   EXPECT_NE(no_calib.log().find("calibration.path: no such file"), std::string::npos) << no_calib.log();
+}
+
+TEST_F(NaneyedTest, TheBundledCaptureIsServedWithItsTruthTimestamps) {
+  const std::string dir_data = std::string(NANEYE_SOURCE_DIR) + "/tests/data/sim-d3-mono/";
+  std::ifstream in(dir_data + "truth.json");
+  const auto truth_json = nlohmann::json::parse(in);
+  const auto& pairs = truth_json.at("pairs");
+  const auto n = pairs.size();
+  start("[source]\nuri = \"file://" + dir_data + "capture.raw?speed=max\"\n");
+  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  const auto events = read_events(*client, "/v1/events?last_event_id=0", n);
+  ASSERT_EQ(events.size(), n);
+  const std::int64_t t0 = events[0].data["t_left_ns"].get<std::int64_t>();
+  const std::int64_t truth0 = pairs[0].at("t_left_ns").get<std::int64_t>();
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& d = events[k].data;
+    EXPECT_EQ(d["pair"], pairs[k].at("pair"));
+    // Sensor times on the capture's own clock (the driver counts from the first record), to 1 ns.
+    EXPECT_NEAR(static_cast<double>(d["t_left_ns"].get<std::int64_t>() - t0),
+                static_cast<double>(pairs[k].at("t_left_ns").get<std::int64_t>() - truth0), 1.0);
+    EXPECT_NEAR(static_cast<double>(d["t_right_ns"].get<std::int64_t>() - d["t_left_ns"].get<std::int64_t>()),
+                static_cast<double>(pairs[k].at("t_right_ns").get<std::int64_t>() -
+                                    pairs[k].at("t_left_ns").get<std::int64_t>()),
+                1.0);
+  }
+  const auto st = get_json("/v1/status");
+  EXPECT_EQ(st["counters"]["pairs_dropped"], 0);
+  EXPECT_EQ(st["counters"]["sync_losses"], 0);
+  EXPECT_EQ(st["state"], "stopped");  // a replay without loop=1 ends
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
 }

@@ -6,10 +6,10 @@
 #include <thread>
 
 #include "capture.hpp"
-#include "temp_dir.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
+#include "temp_dir.hpp"
 
 using namespace naneye;
 using namespace naneye::daemon::test;
