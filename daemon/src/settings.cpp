@@ -48,7 +48,7 @@ double get_double(const toml::node& n, const std::string& key, double lo, double
 
 std::filesystem::path resolve(const std::filesystem::path& base, const std::string& p) {
   std::filesystem::path path(p);
-  return path.is_relative() && !base.empty() ? base / path : path;
+  return path.is_relative() && !base.empty() ? (base / path).lexically_normal() : path;
 }
 
 using Setter = std::function<void(const toml::node&, const std::string& key)>;
@@ -141,7 +141,7 @@ Settings load_settings(const std::filesystem::path& file) {
   std::stringstream text;
   text << in.rdbuf();
   try {
-    return parse_settings(text.str(), file.parent_path());
+    return parse_settings(text.str(), std::filesystem::absolute(file).lexically_normal().parent_path());
   } catch (const SettingsError& e) {
     throw SettingsError(file.string() + ": " + e.what());
   }

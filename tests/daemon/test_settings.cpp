@@ -51,7 +51,7 @@ level = "debug"
 )",
                                 "/etc/naneye");
   EXPECT_EQ(s.source_uri, "file:///x.raw?speed=max");
-  EXPECT_EQ(s.sample_capture, std::filesystem::path("/etc/naneye/../data/sample.raw"));
+  EXPECT_EQ(s.sample_capture, std::filesystem::path("/etc/data/sample.raw"));
   ASSERT_EQ(s.calibration.size(), 2u);
   EXPECT_EQ(s.calibration[0], std::filesystem::path("/etc/naneye/intr.yml"));
   EXPECT_EQ(s.calibration[1], std::filesystem::path("/abs/extr.yml"));
