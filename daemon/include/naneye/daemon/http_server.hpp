@@ -1,0 +1,54 @@
+#pragma once
+// naneyed's HTTP API (docs/http-api.md) over cpp-httplib. Handlers only read what the pipeline
+// publishes; none of them can make the pipeline wait.
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "naneye/daemon/pipeline.hpp"
+#include "naneye/daemon/settings.hpp"
+
+namespace httplib {
+class Server;
+}
+
+namespace naneye::daemon {
+
+// Shared by the handlers; counters are read by /v1/status and /metrics.
+struct HttpContext {
+  Settings settings;
+  Pipeline* pipeline = nullptr;
+  std::string version;
+  std::atomic<int> sse_clients{0};
+  std::atomic<std::uint64_t> sse_dropped{0};
+  std::atomic<std::uint64_t> sse_events{0};
+  std::atomic<bool> stopping{false};
+};
+
+class HttpServer {
+ public:
+  HttpServer(const Settings& settings, Pipeline& pipeline, std::string version);
+  ~HttpServer();
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  // Binds settings.http_host:http_port (0: ephemeral) and returns the port; throws on failure.
+  int bind();
+  // Serves on its own thread (plus httplib's pool of settings.http_threads).
+  void start();
+  // Closes the listening socket and ends event streams; waits up to `grace` for the server's
+  // threads. False when connections were still open after it (the caller may exit anyway).
+  bool stop(std::chrono::milliseconds grace);
+
+  const HttpContext& context() const { return *ctx_; }
+
+ private:
+  std::unique_ptr<HttpContext> ctx_;
+  std::unique_ptr<httplib::Server> server_;
+  std::thread thread_;
+  std::atomic<bool> finished_{false};
+};
+
+}  // namespace naneye::daemon

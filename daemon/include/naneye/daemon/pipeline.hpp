@@ -1,0 +1,145 @@
+#pragma once
+// The reconstruction worker: pulls pairs from the source (whose own capture thread fills its SPSC
+// ring), runs the PairProcessor into a preallocated result slot and publishes it lock-free. HTTP
+// threads read the published slots; nothing they do can make the worker wait.
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "naneye/daemon/latency.hpp"
+#include "naneye/daemon/pinned_slots.hpp"
+#include "naneye/daemon/processor.hpp"
+#include "naneye/daemon/settings.hpp"
+#include "naneye/driver/frame_source.hpp"
+#include "naneye/recon/rig.hpp"
+
+namespace naneye::daemon {
+
+// Opens a source for a URI (the driver's registry in naneyed); throws driver::SourceError.
+using SourceFactory = std::function<std::unique_ptr<driver::FrameSource>(const std::string& uri)>;
+
+// One published result with the times the service adds to it.
+struct Published {
+  recon::PairResult result;
+  std::uint64_t seq = 0;          // 1, 2, 3... per processed pair: the /v1/events id
+  std::int64_t capture_ns = 0;    // CLOCK_MONOTONIC when the pair's last record arrived
+  std::int64_t published_ns = 0;  // CLOCK_MONOTONIC when it was published
+  std::int64_t recon_ns = 0;      // time spent in the processor
+};
+
+// The latest frames, copied every frame_snapshot_interval_ms for /v1/frames (not every pair).
+struct FrameSnapshot {
+  std::uint64_t seq = 0, pair = 0;
+  driver::ColorMode color = driver::ColorMode::mono;
+  std::array<std::uint16_t, driver::kPixelCount> left{}, right{};
+  int corners = 0;
+  std::array<Eigen::Vector2d, recon::kMaxCorners> left_px{}, right_px{};
+};
+
+enum class ServiceState { starting, streaming, waiting_for_device, stalled, stopped };
+const char* to_string(ServiceState s);
+
+// Where the source came from (for "auto", which device or which fallback capture, and why).
+struct SourceChoice {
+  std::string uri;
+  std::string reason;
+  bool fallback = false;  // "auto" found no readout board and fell back to the sample capture
+};
+
+// A consistent-enough copy of everything /v1/status, /metrics and the watchdog report.
+struct PipelineStatus {
+  ServiceState state = ServiceState::starting;
+  std::string source_state = "none";
+  std::optional<driver::SourceInfo> info;
+  driver::SourceCounters counters;
+  std::optional<std::string> source_error;
+  SourceChoice choice;
+  std::string processor;
+  std::uint64_t pairs_processed = 0;
+  std::uint64_t publish_skipped = 0;  // every slot pinned by readers: result computed, not published
+  std::uint64_t source_opens = 0, source_open_failures = 0;
+  std::uint64_t calibration_reloads = 0;
+  double fps_left = 0, fps_right = 0;
+  std::int64_t offset_ns = 0;
+  std::optional<double> last_result_age_ms;
+  LatencyRecorder::Snapshot recon, capture_to_publish;
+  double uptime_s = 0;
+};
+
+class Pipeline {
+ public:
+  Pipeline(const Settings& settings, std::unique_ptr<PairProcessor> processor, SourceFactory factory,
+           SourceChoice choice, std::shared_ptr<const recon::StereoRig> rig);
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  // Opens the source (a failure to open is "waiting_for_device", retried with backoff) and starts
+  // the worker. Returns once the first open attempt is done.
+  void start();
+  // Stops the source, processes what its ring still holds, joins the worker. Idempotent.
+  void stop();
+
+  // From any thread: the worker switches to `rig` between two pairs; HTTP readers see it at once.
+  void reload_rig(std::shared_ptr<const recon::StereoRig> rig);
+  std::shared_ptr<const recon::StereoRig> rig() const;
+
+  const PinnedSlots<Published>& results() const { return results_; }
+  const PinnedSlots<FrameSnapshot>& frames() const { return frames_; }
+  PipelineStatus status() const;
+  // Worker loop iterations: advances while the worker is alive, pairs or not.
+  std::uint64_t heartbeat() const { return heartbeat_.load(std::memory_order_relaxed); }
+  std::uint64_t pairs_processed() const { return processed_.load(std::memory_order_relaxed); }
+  bool source_finished() const;
+
+ private:
+  void run();
+  bool open_source();
+  void handle(driver::PairPtr pair);
+  void close_source();
+
+  Settings settings_;
+  std::unique_ptr<PairProcessor> processor_;
+  SourceFactory factory_;
+  SourceChoice choice_;
+  std::chrono::steady_clock::time_point started_;
+
+  mutable std::mutex source_mu_;  // guards replacing source_ against status(); never taken per pair
+  std::unique_ptr<driver::FrameSource> source_;
+
+  mutable std::mutex rig_mu_;  // HTTP readers and reloads only; the worker takes it once per reload
+  std::shared_ptr<const recon::StereoRig> rig_;
+  std::atomic<bool> rig_pending_{false};
+
+  PinnedSlots<Published> results_;
+  PinnedSlots<FrameSnapshot> frames_;
+  Published scratch_;  // used when every slot is pinned, so processing never waits
+
+  std::atomic<bool> stop_{false};
+  std::thread worker_;
+  std::atomic<std::uint64_t> heartbeat_{0}, processed_{0}, skipped_{0}, opens_{0}, open_failures_{0},
+      reloads_{0};
+  std::atomic<double> fps_left_{0}, fps_right_{0};
+  std::atomic<std::int64_t> offset_ns_{0};
+  std::atomic<bool> waiting_{false};
+  static constexpr std::int64_t kNoTime = INT64_MIN;
+  struct PeriodEstimate {
+    std::int64_t last = kNoTime;
+    double period = 0;  // ns
+    int rejected = 0;
+  };
+  PeriodEstimate left_period_, right_period_;  // worker only
+  std::int64_t last_frames_ns_ = 0;            // worker only
+  LatencyRecorder recon_latency_, capture_latency_;
+};
+
+std::int64_t monotonic_ns();
+
+}  // namespace naneye::daemon

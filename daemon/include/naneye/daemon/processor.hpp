@@ -1,0 +1,35 @@
+#pragma once
+// The per-pair processing step the pipeline runs on its worker thread. The product's step
+// (detect -> undistort -> triangulate -> board pose -> metrics) is assembled from recon/ and drops in
+// here; the daemon only depends on this interface.
+#include <memory>
+#include <string_view>
+
+#include "naneye/daemon/settings.hpp"
+#include "naneye/driver/frame.hpp"
+#include "naneye/recon/pair_result.hpp"
+#include "naneye/recon/rig.hpp"
+
+namespace naneye::daemon {
+
+class PairProcessor {
+ public:
+  virtual ~PairProcessor() = default;
+  // Called on the worker thread before the first pair and again between pairs after a reload.
+  virtual void set_rig(const recon::StereoRig& rig) = 0;
+  // Fills `out` (a preallocated slot that still holds an older result: overwrite every field).
+  // Must not allocate: it runs once per pair.
+  virtual void process(const driver::StereoPair& pair, recon::PairResult& out) = 0;
+  // Shown in the log and /v1/status.
+  virtual std::string_view name() const = 0;
+};
+
+// The processing step naneyed runs. Until the corner detector and the triangulation are wired in,
+// this is TimestampsOnly: it reports every pair (index, timestamps) with board_found = false, and
+// says so in the log and /v1/status; it never invents corners.
+std::unique_ptr<PairProcessor> make_processor(const Settings& settings);
+
+// Copies the pair's identity and timestamps into `out` and clears everything else.
+void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out);
+
+}  // namespace naneye::daemon

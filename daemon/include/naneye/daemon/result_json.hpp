@@ -1,0 +1,18 @@
+#pragma once
+// PairResult <-> JSON: the object of issue #5 that `naneye recon --json` prints and naneyed serves at
+// /v1/depth and /v1/events. One serializer for both so they cannot drift apart.
+#include <nlohmann/json.hpp>
+
+#include "naneye/recon/pair_result.hpp"
+
+namespace naneye::daemon {
+
+// {"pair", "t_left_ns", "t_right_ns", "board_found", "points": [...], "board": {...}|null,
+//  "metrics": {...}|null}; invalid points carry null coordinates.
+nlohmann::json result_to_json(const recon::PairResult& r);
+
+// The inverse (for clients and tests); throws nlohmann::json::exception on a malformed object and
+// std::invalid_argument when it holds more than recon::kMaxCorners points.
+recon::PairResult result_from_json(const nlohmann::json& j);
+
+}  // namespace naneye::daemon

@@ -1,0 +1,159 @@
+// /v1/depth, /v1/depth/at, /v1/points, /v1/points.ply.
+#include <cstdio>
+#include <sstream>
+
+#include "http_internal.hpp"
+#include "naneye/daemon/depth_at.hpp"
+#include "naneye/daemon/result_json.hpp"
+
+namespace naneye::daemon::http {
+namespace {
+
+double age_ms(const Published& p) {
+  return static_cast<double>(monotonic_ns() - p.published_ns) * 1e-6;
+}
+
+void no_result(httplib::Response& res) {
+  send_error(res, 503, "no_result", "no stereo pair has been reconstructed yet");
+}
+
+// Serializing a result costs far more than serving it, and many requests ask for the same one: each
+// HTTP thread keeps the JSON of the last result it served (nlohmann sorts keys, so "age_ms" is
+// always first and is spliced in front).
+struct DepthCache {
+  std::uint64_t seq = 0;
+  std::string body_tail;  // the object without its opening brace
+};
+
+}  // namespace
+
+void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
+  svr.Get("/v1/depth", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {"max_age_ms"})) return;
+    std::optional<std::int64_t> max_age;
+    if (!int_param(req, res, "max_age_ms", 0, 86'400'000, max_age)) return;
+    thread_local DepthCache cache;
+    double age = 0;
+    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t seq) {
+      age = age_ms(p);
+      if (cache.seq != seq) {
+        cache.body_tail = result_to_json(p.result).dump().substr(1);
+        cache.seq = seq;
+      }
+    });
+    if (!have) return no_result(res);
+    if (max_age && age > static_cast<double>(*max_age)) {
+      char detail[128];
+      std::snprintf(detail, sizeof detail, "latest result is %.1f ms old, more than max_age_ms=%lld", age,
+                    static_cast<long long>(*max_age));
+      return send_error(res, 503, "stale_result", detail);
+    }
+    std::string body = "{\"age_ms\":" + nlohmann::json(age).dump() + ",";
+    body += cache.body_tail;
+    res.set_content(std::move(body), "application/json");
+  });
+
+  svr.Get("/v1/depth/at", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {"u", "v"})) return;
+    std::optional<double> u, v;
+    if (!double_param(req, res, "u", u) || !double_param(req, res, "v", v)) return;
+    if (!u || !v)
+      return send_error(res, 400, "bad_parameter",
+                        "u and v (left raw pixel, centres at integers) are required");
+    const auto rig = ctx.pipeline->rig();
+    const auto& cam = rig->left;
+    if (*u < -0.5 || *v < -0.5 || *u > cam.width() - 0.5 || *v > cam.height() - 0.5) {
+      return send_error(res, 422, "outside_image",
+                        "pixel outside the " + std::to_string(cam.width()) + "x" +
+                            std::to_string(cam.height()) + " sensor");
+    }
+    nlohmann::json body;
+    DepthAt d;
+    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t) {
+      d = depth_at(cam, p.result, {*u, *v});
+      body["pair"] = p.result.pair;
+      body["age_ms"] = age_ms(p);
+    });
+    if (!have) return no_result(res);
+    switch (d.status) {
+      case DepthAtStatus::ok:
+        break;
+      case DepthAtStatus::outside_model:
+        return send_error(res, 422, "outside_model",
+                          "the pixel lies beyond the fold of the distortion model: no ray maps to it");
+      case DepthAtStatus::no_convergence:
+        return send_error(res, 422, "no_convergence", "the pixel's ray could not be computed (domain edge)");
+      case DepthAtStatus::no_board:
+        return send_error(res, 422, "no_board", "the latest pair has no board to intersect");
+      default:
+        return send_error(res, 422, "off_board",
+                          std::string("the pixel's ray does not meet the board: ") + to_string(d.status));
+    }
+    body["u"] = *u;
+    body["v"] = *v;
+    body["xyz_mm"] = {d.xyz_mm.x(), d.xyz_mm.y(), d.xyz_mm.z()};
+    body["depth_mm"] = d.depth_mm;
+    body["depth_sigma_mm"] = d.depth_sigma_mm;
+    body["range_mm"] = d.range_mm;
+    body["board_xy_mm"] = {d.board_xy_mm.x(), d.board_xy_mm.y()};
+    send_json(res, body);
+  });
+
+  svr.Get("/v1/points", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {})) return;
+    nlohmann::json body;
+    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t) {
+      const auto& r = p.result;
+      body["pair"] = r.pair;
+      body["age_ms"] = age_ms(p);
+      body["board_found"] = r.board_found;
+      nlohmann::json pts = nlohmann::json::array();
+      for (int i = 0; i < r.point_count; ++i) {
+        const auto& pt = r.points[static_cast<std::size_t>(i)];
+        if (!pt.valid) continue;
+        pts.push_back({{"id", pt.id},
+                       {"row", pt.row},
+                       {"col", pt.col},
+                       {"xyz_mm", {pt.xyz_mm.x(), pt.xyz_mm.y(), pt.xyz_mm.z()}},
+                       {"depth_sigma_mm", pt.depth_sigma_mm},
+                       {"xyz_board_mm", {pt.xyz_board_mm.x(), pt.xyz_board_mm.y(), pt.xyz_board_mm.z()}}});
+      }
+      body["points"] = std::move(pts);
+    });
+    if (!have) return no_result(res);
+    send_json(res, body);
+  });
+
+  svr.Get("/v1/points.ply", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {"which"})) return;
+    const std::string which = req.has_param("which") ? req.get_param_value("which") : "triangulated";
+    if (which != "triangulated" && which != "board") {
+      return send_error(res, 400, "bad_parameter",
+                        "which must be triangulated or board, got \"" + which + "\"");
+    }
+    std::ostringstream vertices;
+    vertices.precision(9);
+    int count = 0;
+    std::uint64_t pair = 0;
+    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t) {
+      pair = p.result.pair;
+      for (int i = 0; i < p.result.point_count; ++i) {
+        const auto& pt = p.result.points[static_cast<std::size_t>(i)];
+        if (!pt.valid) continue;
+        const Eigen::Vector3d& x = which == "board" ? pt.xyz_board_mm : pt.xyz_mm;
+        vertices << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+        ++count;
+      }
+    });
+    if (!have) return no_result(res);
+    std::ostringstream ply;
+    ply << "ply\nformat ascii 1.0\ncomment naneye pair " << pair << ", " << which
+        << " corners, left camera frame, millimetres\nelement vertex " << count
+        << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+        << vertices.str();
+    res.set_header("Content-Disposition", "inline; filename=\"naneye-" + std::to_string(pair) + ".ply\"");
+    res.set_content(ply.str(), "application/x-ply");
+  });
+}
+
+}  // namespace naneye::daemon::http

@@ -1,0 +1,90 @@
+// /v1/events: Server-Sent Events, one "result" event per processed pair. A client's queue is the
+// window of results the pipeline still holds ahead of its cursor (pipeline.history): the pipeline
+// never waits for a client, and a client that falls further behind than that is dropped.
+#include <thread>
+
+#include "http_internal.hpp"
+#include "naneye/daemon/result_json.hpp"
+
+namespace naneye::daemon::http {
+namespace {
+
+struct Stream {
+  HttpContext* ctx;
+  std::uint64_t cursor;  // next result number to send
+};
+
+}  // namespace
+
+void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
+  svr.Get("/v1/events", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {"last_event_id"})) return;
+    // EventSource resends the id of the last event it got as Last-Event-ID when it reconnects;
+    // the query parameter does the same for a first connection.
+    std::optional<std::int64_t> last;
+    if (!int_param(req, res, "last_event_id", 0, INT64_MAX, last)) return;
+    if (!last && req.has_header("Last-Event-ID")) {
+      const std::string h = req.get_header_value("Last-Event-ID");
+      try {
+        std::size_t used = 0;
+        const long long v = std::stoll(h, &used);
+        if (used != h.size() || v < 0) throw std::invalid_argument(h);
+        last = v;
+      } catch (const std::exception&) {
+        return send_error(res, 400, "bad_parameter",
+                          "Last-Event-ID must be a result number, got \"" + h + "\"");
+      }
+    }
+    if (ctx.sse_clients.fetch_add(1) >= ctx.settings.sse_max_clients) {
+      ctx.sse_clients.fetch_sub(1);
+      return send_error(res, 503, "too_many_clients",
+                        "at most " + std::to_string(ctx.settings.sse_max_clients) + " event streams at once");
+    }
+    auto stream = std::make_shared<Stream>();
+    stream->ctx = &ctx;
+    // Without a resume point, start with the latest result so the client has one at once.
+    stream->cursor =
+        last ? static_cast<std::uint64_t>(*last) + 1 : ctx.pipeline->results().latest_seq().value_or(1);
+    res.set_header("Cache-Control", "no-cache");
+    res.set_header("X-Accel-Buffering", "no");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [stream](std::size_t, httplib::DataSink& sink) {
+          HttpContext& c = *stream->ctx;
+          const auto& results = c.pipeline->results();
+          if (c.stopping.load()) {
+            sink.done();
+            return true;
+          }
+          const auto latest = results.latest_seq();
+          if (!latest || stream->cursor > *latest) {
+            // Nothing new: poll (the pipeline does not signal readers, so that it never waits).
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+            return true;
+          }
+          std::string event;
+          const bool held = results.read_seq(stream->cursor, [&](const Published& p) {
+            auto j = result_to_json(p.result);
+            j["age_ms"] = static_cast<double>(monotonic_ns() - p.published_ns) * 1e-6;
+            event = "id: " + std::to_string(p.seq) + "\nevent: result\ndata: " + j.dump() + "\n\n";
+          });
+          if (!held) {
+            c.sse_dropped.fetch_add(1);
+            const nlohmann::json err{{"error", "slow_client"},
+                                     {"detail", "result " + std::to_string(stream->cursor) +
+                                                    " is no longer held; the client fell more than " +
+                                                    std::to_string(c.settings.history) + " results behind"}};
+            const std::string msg = "event: dropped\ndata: " + err.dump() + "\n\n";
+            sink.write(msg.data(), msg.size());
+            sink.done();
+            return true;
+          }
+          ++stream->cursor;
+          c.sse_events.fetch_add(1, std::memory_order_relaxed);
+          return sink.write(event.data(), event.size());
+        },
+        [stream](bool) { stream->ctx->sse_clients.fetch_sub(1); });
+  });
+}
+
+}  // namespace naneye::daemon::http

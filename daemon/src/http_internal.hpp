@@ -1,0 +1,37 @@
+#pragma once
+// Pieces shared by the handler files of the HTTP server (not installed, not public API).
+// Eigen (through http_server.hpp) must come before httplib.h: httplib pulls in <resolv.h>, whose
+// `_res` macro would rewrite Eigen's parameter names.
+// clang-format off
+#include "naneye/daemon/http_server.hpp"
+#include <httplib.h>
+// clang-format on
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+namespace naneye::daemon::http {
+
+// Every error body: {"error": code, "detail": human text}.
+void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail);
+void send_json(httplib::Response& res, const nlohmann::json& body, int status = 200);
+
+// Refuses (400) any query parameter not in `allowed`; true when the request may go on.
+bool only_params(const httplib::Request& req, httplib::Response& res,
+                 std::initializer_list<const char*> allowed);
+// Parses an optional parameter; on a bad value sends 400 naming it and returns false.
+bool int_param(const httplib::Request& req, httplib::Response& res, const char* name, std::int64_t lo,
+               std::int64_t hi, std::optional<std::int64_t>& out);
+bool double_param(const httplib::Request& req, httplib::Response& res, const char* name,
+                  std::optional<double>& out);
+
+nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s);
+std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s);
+
+void add_status_routes(httplib::Server& svr, HttpContext& ctx);  // status, healthz, readyz, metrics
+void add_depth_routes(httplib::Server& svr, HttpContext& ctx);   // depth, depth/at, points, points.ply
+void add_frame_routes(httplib::Server& svr, HttpContext& ctx);   // frames/left.png, right.png
+void add_event_routes(httplib::Server& svr, HttpContext& ctx);   // events (SSE)
+
+}  // namespace naneye::daemon::http

@@ -1,0 +1,156 @@
+#include "naneye/daemon/http_server.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "http_internal.hpp"
+
+namespace naneye::daemon {
+namespace http {
+
+void send_json(httplib::Response& res, const nlohmann::json& body, int status) {
+  res.status = status;
+  res.set_content(body.dump(), "application/json");
+}
+
+void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail) {
+  send_json(res, {{"error", error}, {"detail", detail}}, status);
+}
+
+bool only_params(const httplib::Request& req, httplib::Response& res,
+                 std::initializer_list<const char*> allowed) {
+  for (const auto& [key, value] : req.params) {
+    bool ok = false;
+    for (const char* a : allowed) ok |= key == a;
+    if (!ok) {
+      std::string list;
+      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+      send_error(res, 400, "bad_parameter",
+                 "unknown parameter \"" + key + "\"" +
+                     (list.empty() ? "; this path takes none" : "; accepted: " + list));
+      return false;
+    }
+  }
+  return true;
+}
+
+bool int_param(const httplib::Request& req, httplib::Response& res, const char* name, std::int64_t lo,
+               std::int64_t hi, std::optional<std::int64_t>& out) {
+  if (!req.has_param(name)) return true;
+  const std::string v = req.get_param_value(name);
+  std::size_t used = 0;
+  long long x = 0;
+  try {
+    x = std::stoll(v, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (v.empty() || used != v.size() || x < lo || x > hi) {
+    send_error(res, 400, "bad_parameter",
+               std::string(name) + " must be an integer in " + std::to_string(lo) + ".." +
+                   std::to_string(hi) + ", got \"" + v + "\"");
+    return false;
+  }
+  out = x;
+  return true;
+}
+
+bool double_param(const httplib::Request& req, httplib::Response& res, const char* name,
+                  std::optional<double>& out) {
+  if (!req.has_param(name)) return true;
+  const std::string v = req.get_param_value(name);
+  std::size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(v, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (v.empty() || used != v.size() || !std::isfinite(x)) {
+    send_error(res, 400, "bad_parameter", std::string(name) + " must be a finite number, got \"" + v + "\"");
+    return false;
+  }
+  out = x;
+  return true;
+}
+
+}  // namespace http
+
+HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string version)
+    : ctx_(std::make_unique<HttpContext>()), server_(std::make_unique<httplib::Server>()) {
+  ctx_->settings = settings;
+  ctx_->pipeline = &pipeline;
+  ctx_->version = std::move(version);
+  const auto threads = static_cast<std::size_t>(settings.http_threads);
+  server_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  // Short idle keep-alive so that shutdown is not held by an idle client for long.
+  server_->set_keep_alive_timeout(1);
+  // Headers and body go out in separate writes: without TCP_NODELAY, Nagle waits for the client's
+  // delayed ACK (tens of ms) before sending the body.
+  server_->set_tcp_nodelay(true);
+  server_->set_read_timeout(5, 0);
+  server_->set_write_timeout(2, 0);
+  http::add_status_routes(*server_, *ctx_);
+  http::add_depth_routes(*server_, *ctx_);
+  http::add_frame_routes(*server_, *ctx_);
+  http::add_event_routes(*server_, *ctx_);
+  // Unmatched paths (and httplib's own errors) get the JSON error body too.
+  server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+    if (!res.body.empty()) return;
+    if (res.status == 404) {
+      http::send_error(res, 404, "not_found", "no resource at " + req.path + " (see docs/http-api.md)");
+    } else {
+      http::send_error(res, res.status, "http_error", "HTTP status " + std::to_string(res.status));
+    }
+  });
+  server_->set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+    std::string what = "unknown";
+    try {
+      if (ep) std::rethrow_exception(ep);
+    } catch (const std::exception& e) {
+      what = e.what();
+    } catch (...) {
+    }
+    spdlog::get("daemon") ? spdlog::get("daemon")->error("handler failed: {}", what) : void();
+    http::send_error(res, 500, "internal_error", what);
+  });
+}
+
+HttpServer::~HttpServer() {
+  stop(std::chrono::milliseconds(1000));
+  if (thread_.joinable()) thread_.join();
+}
+
+int HttpServer::bind() {
+  const auto& s = ctx_->settings;
+  int port = s.http_port;
+  if (port == 0) {
+    port = server_->bind_to_any_port(s.http_host);
+    if (port < 0) throw std::runtime_error("cannot bind an ephemeral port on " + s.http_host);
+  } else if (!server_->bind_to_port(s.http_host, port)) {
+    throw std::runtime_error("cannot bind " + s.http_host + ":" + std::to_string(port) +
+                             " (in use, or the address is not local)");
+  }
+  return port;
+}
+
+void HttpServer::start() {
+  thread_ = std::thread([this] {
+    server_->listen_after_bind();
+    finished_.store(true);
+  });
+}
+
+bool HttpServer::stop(std::chrono::milliseconds grace) {
+  ctx_->stopping.store(true);
+  if (server_) server_->stop();
+  const auto until = std::chrono::steady_clock::now() + grace;
+  while (thread_.joinable() && !finished_.load() && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return !thread_.joinable() || finished_.load();
+}
+
+}  // namespace naneye::daemon

@@ -1,0 +1,101 @@
+// /v1/status, /healthz, /readyz.
+#include "http_internal.hpp"
+
+namespace naneye::daemon::http {
+namespace {
+
+nlohmann::json latency_json(const LatencyRecorder::Snapshot& l) {
+  return {{"p50", l.p50_ms}, {"p99", l.p99_ms}, {"max", l.max_ms}, {"samples", l.count}};
+}
+
+nlohmann::json counters_json(const driver::SourceCounters& c) {
+  return {{"bytes", c.bytes},
+          {"records", c.records},
+          {"sync_losses", c.sync_losses},
+          {"seq_gaps", c.seq_gaps},
+          {"cut_records", c.cut_records},
+          {"reference_failures", c.reference_failures},
+          {"unpaired", c.unpaired},
+          {"pairs", c.pairs},
+          {"pairs_dropped", c.pairs_dropped},
+          {"reconnects", c.reconnects},
+          {"transfer_errors", c.transfer_errors},
+          {"stalls", c.stalls}};
+}
+
+}  // namespace
+
+nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
+  nlohmann::json source{
+      {"requested", ctx.settings.source_uri},
+      {"uri", s.info ? s.info->uri : s.choice.uri},
+      {"kind", s.info ? nlohmann::json(s.info->kind) : nlohmann::json(nullptr)},
+      {"device", s.info ? nlohmann::json(s.info->device) : nlohmann::json(nullptr)},
+      {"live", s.info ? nlohmann::json(s.info->live) : nlohmann::json(nullptr)},
+      {"nominal_fps", s.info ? nlohmann::json(s.info->nominal_fps) : nlohmann::json(nullptr)},
+      {"state", s.source_state},
+      {"error", s.source_error ? nlohmann::json(*s.source_error) : nlohmann::json(nullptr)},
+      {"fallback", s.choice.fallback},
+      {"reason", s.choice.reason},
+      {"opens", s.source_opens},
+      {"open_failures", s.source_open_failures}};
+  nlohmann::json calib_files = nlohmann::json::array();
+  for (const auto& f : ctx.settings.calibration) calib_files.push_back(f.string());
+  const auto rig = ctx.pipeline->rig();
+  return {{"state", to_string(s.state)},
+          {"version", ctx.version},
+          {"uptime_s", s.uptime_s},
+          {"source", std::move(source)},
+          {"fps", {{"left", s.fps_left}, {"right", s.fps_right}}},
+          {"offset_ms", static_cast<double>(s.offset_ns) * 1e-6},
+          {"counters", counters_json(s.counters)},
+          {"pairs",
+           {{"processed", s.pairs_processed},
+            {"dropped", s.counters.pairs_dropped},
+            {"publish_skipped", s.publish_skipped}}},
+          {"recon_ms", latency_json(s.recon)},
+          {"capture_to_publish_ms", latency_json(s.capture_to_publish)},
+          {"last_result_age_ms",
+           s.last_result_age_ms ? nlohmann::json(*s.last_result_age_ms) : nlohmann::json(nullptr)},
+          {"processor", s.processor},
+          {"calibration",
+           {{"files", calib_files}, {"reloads", s.calibration_reloads}, {"baseline_mm", rig->baseline_mm()}}},
+          {"events",
+           {{"clients", ctx.sse_clients.load()},
+            {"clients_dropped", ctx.sse_dropped.load()},
+            {"sent", ctx.sse_events.load()}}}};
+}
+
+void add_status_routes(httplib::Server& svr, HttpContext& ctx) {
+  svr.Get("/v1/status", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {})) return;
+    send_json(res, status_json(ctx, ctx.pipeline->status()));
+  });
+  svr.Get("/healthz", [](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {})) return;
+    send_json(res, {{"status", "alive"}});
+  });
+  svr.Get("/readyz", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {})) return;
+    const auto s = ctx.pipeline->status();
+    const double max_age = ctx.settings.max_result_age_ms;
+    const bool fresh = s.last_result_age_ms && *s.last_result_age_ms <= max_age;
+    if (s.state == ServiceState::streaming && fresh) {
+      send_json(res, {{"status", "ready"},
+                      {"state", to_string(s.state)},
+                      {"last_result_age_ms", *s.last_result_age_ms}});
+      return;
+    }
+    std::string why = "state is " + std::string(to_string(s.state));
+    if (s.state == ServiceState::streaming) {
+      why = "latest result is older than " + std::to_string(ctx.settings.max_result_age_ms) + " ms";
+    }
+    send_error(res, 503, "not_ready", why);
+  });
+  svr.Get("/metrics", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {})) return;
+    res.set_content(metrics_text(ctx, ctx.pipeline->status()), "text/plain; version=0.0.4; charset=utf-8");
+  });
+}
+
+}  // namespace naneye::daemon::http

@@ -1,0 +1,82 @@
+// /metrics in the Prometheus text exposition format 0.0.4.
+#include <sstream>
+
+#include "http_internal.hpp"
+
+namespace naneye::daemon::http {
+namespace {
+
+void counter(std::ostringstream& os, const std::string& name, const std::string& help, std::uint64_t v) {
+  os << "# HELP " << name << ' ' << help << "\n# TYPE " << name << " counter\n" << name << ' ' << v << '\n';
+}
+
+void gauge(std::ostringstream& os, const std::string& name, const std::string& help, double v) {
+  os << "# HELP " << name << ' ' << help << "\n# TYPE " << name << " gauge\n" << name << ' ' << v << '\n';
+}
+
+void histogram(std::ostringstream& os, const std::string& name, const std::string& help,
+               const LatencyRecorder::Snapshot& l) {
+  os << "# HELP " << name << ' ' << help << "\n# TYPE " << name << " histogram\n";
+  std::uint64_t cumulative = 0;
+  for (std::size_t b = 0; b < LatencyRecorder::kBounds.size(); ++b) {
+    cumulative += l.buckets[b];
+    os << name << "_bucket{le=\"" << LatencyRecorder::kBounds[b] << "\"} " << cumulative << '\n';
+  }
+  cumulative += l.buckets.back();
+  os << name << "_bucket{le=\"+Inf\"} " << cumulative << '\n';
+  os << name << "_sum " << l.sum_s << '\n' << name << "_count " << cumulative << '\n';
+}
+
+}  // namespace
+
+std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
+  std::ostringstream os;
+  os.precision(9);
+  const auto& c = s.counters;
+  counter(os, "naneye_pairs_processed_total", "Stereo pairs reconstructed by the worker.", s.pairs_processed);
+  counter(os, "naneye_results_unpublished_total",
+          "Results computed but not published because readers pinned every slot.", s.publish_skipped);
+  counter(os, "naneye_source_bytes_total", "Bytes received from the source.", c.bytes);
+  counter(os, "naneye_source_records_total", "Complete records delivered by the parser.", c.records);
+  counter(os, "naneye_source_sync_losses_total", "Times the parser lost and re-acquired sync.",
+          c.sync_losses);
+  counter(os, "naneye_source_seq_gaps_total", "Records lost upstream (sum of sequence jumps).", c.seq_gaps);
+  counter(os, "naneye_source_cut_records_total", "Records cut short and dropped.", c.cut_records);
+  counter(os, "naneye_source_reference_failures_total", "Records failing the reference-pixel check.",
+          c.reference_failures);
+  counter(os, "naneye_source_unpaired_total", "Frames that found no partner within the tolerance.",
+          c.unpaired);
+  counter(os, "naneye_source_pairs_total", "Pairs handed to the worker by the source.", c.pairs);
+  counter(os, "naneye_source_pairs_dropped_total", "Oldest pairs dropped because the worker fell behind.",
+          c.pairs_dropped);
+  counter(os, "naneye_source_reconnects_total", "Device reconnections.", c.reconnects);
+  counter(os, "naneye_source_transfer_errors_total", "Failed transfers.", c.transfer_errors);
+  counter(os, "naneye_source_stalls_total", "Stall timeouts of the source.", c.stalls);
+  counter(os, "naneye_source_opens_total", "Times the source was opened.", s.source_opens);
+  counter(os, "naneye_calibration_reloads_total", "Calibration reloads (SIGHUP).", s.calibration_reloads);
+  counter(os, "naneye_events_sent_total", "Server-sent events written to clients.", ctx.sse_events.load());
+  counter(os, "naneye_events_clients_dropped_total", "Event-stream clients dropped for falling behind.",
+          ctx.sse_dropped.load());
+  gauge(os, "naneye_events_clients", "Open event-stream clients.", ctx.sse_clients.load());
+  gauge(os, "naneye_sensor_fps_left", "Frame rate of the left sensor (its own clock).", s.fps_left);
+  gauge(os, "naneye_sensor_fps_right", "Frame rate of the right sensor (its own clock).", s.fps_right);
+  gauge(os, "naneye_pair_offset_seconds", "Right minus left timestamp of the latest pair.",
+        static_cast<double>(s.offset_ns) * 1e-9);
+  gauge(os, "naneye_last_result_age_seconds", "Age of the latest published result (-1 before the first).",
+        s.last_result_age_ms ? *s.last_result_age_ms * 1e-3 : -1.0);
+  gauge(os, "naneye_uptime_seconds", "Seconds since the service started.", s.uptime_s);
+  os << "# HELP naneye_state The service state (1 for the current one).\n# TYPE naneye_state gauge\n";
+  for (auto st : {ServiceState::starting, ServiceState::streaming, ServiceState::waiting_for_device,
+                  ServiceState::stalled, ServiceState::stopped}) {
+    os << "naneye_state{state=\"" << to_string(st) << "\"} " << (st == s.state ? 1 : 0) << '\n';
+  }
+  os << "# HELP naneye_build_info Version of the running naneyed.\n# TYPE naneye_build_info gauge\n"
+     << "naneye_build_info{version=\"" << ctx.version << "\"} 1\n";
+  histogram(os, "naneye_recon_duration_seconds", "Time the processing step took per pair.", s.recon);
+  histogram(os, "naneye_capture_to_publish_seconds",
+            "From the arrival of a pair's last record to the publication of its result.",
+            s.capture_to_publish);
+  return os.str();
+}
+
+}  // namespace naneye::daemon::http

@@ -1,0 +1,187 @@
+#include "naneye/daemon/settings.hpp"
+
+#include <spdlog/common.h>
+
+#include <toml++/toml.h>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace naneye::daemon {
+namespace {
+
+std::string type_name(const toml::node& n) {
+  std::ostringstream os;
+  os << n.type();
+  return os.str();
+}
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) {
+  throw SettingsError(key + ": " + what);
+}
+
+std::string get_string(const toml::node& n, const std::string& key) {
+  if (auto v = n.value<std::string>(); v && n.is_string()) return *v;
+  fail(key, "expected a string, got " + type_name(n));
+}
+
+std::int64_t get_int(const toml::node& n, const std::string& key, std::int64_t lo, std::int64_t hi) {
+  if (!n.is_integer()) fail(key, "expected an integer, got " + type_name(n));
+  const auto v = *n.value<std::int64_t>();
+  if (v < lo || v > hi) {
+    fail(key, "must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + std::to_string(v));
+  }
+  return v;
+}
+
+double get_double(const toml::node& n, const std::string& key, double lo, double hi) {
+  if (!n.is_number()) fail(key, "expected a number, got " + type_name(n));
+  const auto v = *n.value<double>();
+  if (!(v >= lo && v <= hi)) {
+    std::ostringstream os;
+    os << "must be in " << lo << ".." << hi << ", got " << v;
+    fail(key, os.str());
+  }
+  return v;
+}
+
+std::filesystem::path resolve(const std::filesystem::path& base, const std::string& p) {
+  std::filesystem::path path(p);
+  return path.is_relative() && !base.empty() ? (base / path).lexically_normal() : path;
+}
+
+using Setter = std::function<void(const toml::node&, const std::string& key)>;
+
+// Every accepted key and how it lands in Settings; anything else is refused by name.
+std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& base) {
+  auto integer = [](int& field, std::int64_t lo, std::int64_t hi) {
+    return [&field, lo, hi](const toml::node& n, const std::string& key) {
+      field = static_cast<int>(get_int(n, key, lo, hi));
+    };
+  };
+  return {
+      {"source.uri", [&s](const toml::node& n, const std::string& k) { s.source_uri = get_string(n, k); }},
+      {"source.sample_capture",
+       [&s, base](const toml::node& n, const std::string& k) {
+         s.sample_capture = resolve(base, get_string(n, k));
+       }},
+      {"calibration.path",
+       [&s, base](const toml::node& n, const std::string& k) {
+         s.calibration.clear();
+         if (auto* arr = n.as_array()) {
+           if (arr->empty()) fail(k, "expected at least one file");
+           for (std::size_t i = 0; i < arr->size(); ++i) {
+             s.calibration.push_back(
+                 resolve(base, get_string(*arr->get(i), k + "[" + std::to_string(i) + "]")));
+           }
+         } else {
+           s.calibration.push_back(resolve(base, get_string(n, k)));
+         }
+       }},
+      {"http.host", [&s](const toml::node& n, const std::string& k) { s.http_host = get_string(n, k); }},
+      {"http.port", integer(s.http_port, 0, 65535)},
+      {"http.threads", integer(s.http_threads, 2, 256)},
+      {"pipeline.corner_sigma_px",
+       [&s](const toml::node& n, const std::string& k) { s.corner_sigma_px = get_double(n, k, 1e-4, 10.0); }},
+      {"pipeline.max_result_age_ms", integer(s.max_result_age_ms, 1, 3'600'000)},
+      {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
+      {"pipeline.history", integer(s.history, 4, 4096)},
+      {"pipeline.sse_queue_depth", integer(s.sse_queue_depth, 2, 4096)},
+      {"pipeline.sse_max_clients", integer(s.sse_max_clients, 1, 64)},
+      {"pipeline.frame_snapshot_interval_ms", integer(s.frame_snapshot_interval_ms, 0, 60'000)},
+      {"log.level",
+       [&s](const toml::node& n, const std::string& k) {
+         const auto v = get_string(n, k);
+         if (spdlog::level::from_str(v) == spdlog::level::off && v != "off") {
+           fail(k, "expected one of trace, debug, info, warn, error, critical, off, got \"" + v + "\"");
+         }
+         s.log_level = v;
+       }},
+  };
+}
+
+void apply(const toml::table& table, const std::string& prefix, std::map<std::string, Setter>& known) {
+  for (auto&& [k, node] : table) {
+    const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    if (auto it = known.find(key); it != known.end()) {
+      it->second(node, key);
+    } else if (const auto* sub = node.as_table(); sub && prefix.empty()) {
+      bool section_known = false;
+      for (const auto& [name, _] : known) section_known |= name.rfind(key + ".", 0) == 0;
+      if (!section_known) fail(key, "unknown section");
+      apply(*sub, key, known);
+    } else {
+      fail(key, "unknown key");
+    }
+  }
+}
+
+}  // namespace
+
+Settings parse_settings(const std::string& toml_text, const std::filesystem::path& base_dir) {
+  toml::table table;
+  try {
+    table = toml::parse(toml_text);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << "TOML syntax error at line " << e.source().begin.line << ", column " << e.source().begin.column
+       << ": " << e.description();
+    throw SettingsError(os.str());
+  }
+  Settings s;
+  auto known = setters(s, base_dir);
+  apply(table, "", known);
+  return s;
+}
+
+Settings load_settings(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw SettingsError(file.string() + ": cannot be read");
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return parse_settings(text.str(), std::filesystem::absolute(file).lexically_normal().parent_path());
+  } catch (const SettingsError& e) {
+    throw SettingsError(file.string() + ": " + e.what());
+  }
+}
+
+void parse_listen(const std::string& value, const std::string& key, std::string& host, int& port) {
+  const auto colon = value.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == value.size()) {
+    fail(key, "expected HOST:PORT, got \"" + value + "\"");
+  }
+  std::string h = value.substr(0, colon);
+  if (h.size() > 2 && h.front() == '[' && h.back() == ']') h = h.substr(1, h.size() - 2);
+  const std::string p = value.substr(colon + 1);
+  int parsed = 0;
+  for (char c : p) {
+    if (c < '0' || c > '9' || parsed > 65535)
+      fail(key, "port must be a number in 0..65535, got \"" + p + "\"");
+    parsed = parsed * 10 + (c - '0');
+  }
+  if (parsed > 65535) fail(key, "port must be a number in 0..65535, got \"" + p + "\"");
+  host = h;
+  port = parsed;
+}
+
+void validate(const Settings& s) {
+  if (s.source_uri.empty()) fail("source.uri", "must not be empty");
+  if (s.calibration.empty()) fail("calibration.path", "is required");
+  for (const auto& f : s.calibration) {
+    if (!std::filesystem::is_regular_file(f)) fail("calibration.path", "no such file: " + f.string());
+  }
+  if (s.source_uri == "auto" && !s.sample_capture.empty() &&
+      !std::filesystem::is_regular_file(s.sample_capture)) {
+    fail("source.sample_capture", "no such file: " + s.sample_capture.string());
+  }
+  if (s.http_host.empty()) fail("http.host", "must not be empty");
+  if (s.sse_max_clients >= s.http_threads) {
+    fail("pipeline.sse_max_clients", "must be below http.threads (each event stream holds a thread), got " +
+                                         std::to_string(s.sse_max_clients) +
+                                         " >= " + std::to_string(s.http_threads));
+  }
+}
+
+}  // namespace naneye::daemon

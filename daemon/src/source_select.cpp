@@ -1,0 +1,25 @@
+#include "naneye/daemon/source_select.hpp"
+
+namespace naneye::daemon {
+
+SourceChoice choose_source(const Settings& settings, const BoardLister& boards) {
+  if (settings.source_uri != "auto") return {settings.source_uri, "configured", false};
+  const auto found = boards ? boards() : std::vector<std::string>{};
+  if (!found.empty()) {
+    return {found.front(),
+            "auto: first attached NanEye readout board (" + std::to_string(found.size()) + " attached)",
+            false};
+  }
+  if (settings.sample_capture.empty()) {
+    throw SettingsError(
+        "source.sample_capture: source.uri is \"auto\", no NanEye readout board is attached and no sample "
+        "capture "
+        "is configured to fall back to");
+  }
+  return {"file://" + settings.sample_capture.string() + "?speed=realtime&loop=1",
+          "auto: no NanEye readout board attached; replaying the bundled sample capture " +
+              settings.sample_capture.string() + " in a loop at real time",
+          true};
+}
+
+}  // namespace naneye::daemon

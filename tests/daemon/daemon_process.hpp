@@ -1,0 +1,117 @@
+#pragma once
+// Starts the real naneyed binary (NANEYED_PATH) on 127.0.0.1 with an ephemeral port for the
+// integration tests, reads the port from its log, and stops it with a signal.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "temp_dir.hpp"
+
+extern char** environ;
+
+namespace naneye::daemon::test {
+
+inline std::string read_file(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class DaemonProcess {
+ public:
+  // Runs `naneyed args...` with stderr (the log) into `log`.
+  DaemonProcess(std::vector<std::string> args, std::filesystem::path log) : log_(std::move(log)) {
+    std::vector<std::string> argv{NANEYED_PATH};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> cargv;
+    for (auto& a : argv) cargv.push_back(a.data());
+    cargv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 2, log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 1, (log_.string() + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+    if (posix_spawn(&pid_, cargv[0], &fa, nullptr, cargv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+  }
+  ~DaemonProcess() {
+    if (pid_ > 0 && !exited_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+
+  // The port from "listening on http://127.0.0.1:PORT/", or empty if the daemon died first.
+  std::optional<int> wait_port(std::chrono::milliseconds timeout = std::chrono::seconds(15)) {
+    const std::regex re(R"(listening on http://[^:]+:(\d+)/)");
+    const auto until = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < until) {
+      std::smatch m;
+      const std::string text = log();
+      if (std::regex_search(text, m, re)) return std::stoi(m[1]);
+      if (waitpid(pid_, &status_, WNOHANG) == pid_) {
+        exited_ = true;
+        return std::nullopt;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return std::nullopt;
+  }
+
+  // Sends `sig` and waits for the exit; returns the exit code (or -signal) and the time it took.
+  std::pair<int, std::chrono::milliseconds> stop(
+      int sig, std::chrono::milliseconds timeout = std::chrono::seconds(10)) {
+    const auto t0 = std::chrono::steady_clock::now();
+    kill(pid_, sig);
+    while (std::chrono::steady_clock::now() - t0 < timeout) {
+      if (waitpid(pid_, &status_, WNOHANG) == pid_) {
+        exited_ = true;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    const auto ms =
+        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0);
+    if (!exited_) return {-1000, ms};
+    return {WIFEXITED(status_) ? WEXITSTATUS(status_) : -WTERMSIG(status_), ms};
+  }
+
+  // Runs naneyed to completion (for --check-config); returns the exit code.
+  int wait_exit(std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - t0 < timeout) {
+      if (waitpid(pid_, &status_, WNOHANG) == pid_) {
+        exited_ = true;
+        return WIFEXITED(status_) ? WEXITSTATUS(status_) : -WTERMSIG(status_);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return -1000;
+  }
+
+  void signal(int sig) { kill(pid_, sig); }
+  std::string log() const { return read_file(log_); }
+  std::string out() const { return read_file(log_.string() + ".out"); }
+  bool running() const { return pid_ > 0 && !exited_; }
+
+ private:
+  std::filesystem::path log_;
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool exited_ = false;
+};
+
+}  // namespace naneye::daemon::test

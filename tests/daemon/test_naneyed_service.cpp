@@ -1,0 +1,190 @@
+// naneyed as a service: event streams, shutdown, reload, configuration checks.
+#include <atomic>
+#include <fstream>
+#include <sstream>
+
+#include "naneyed_fixture.hpp"
+
+using namespace naneye::daemon::test;
+
+namespace {
+
+struct Event {
+  std::string type;
+  std::string id;
+  nlohmann::json data;
+};
+
+// Reads /v1/events until `want` events arrived (or the server ended the stream).
+std::vector<Event> read_events(httplib::Client& client, const std::string& path, std::size_t want) {
+  std::vector<Event> events;
+  std::string buffer;
+  client.Get(path.c_str(), [&](const char* data, std::size_t len) {
+    buffer.append(data, len);
+    std::size_t end;
+    while ((end = buffer.find("\n\n")) != std::string::npos) {
+      Event e{"message", "", nullptr};
+      std::istringstream lines(buffer.substr(0, end));
+      buffer.erase(0, end + 2);
+      for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("event: ", 0) == 0) e.type = line.substr(7);
+        if (line.rfind("id: ", 0) == 0) e.id = line.substr(4);
+        if (line.rfind("data: ", 0) == 0) e.data = nlohmann::json::parse(line.substr(6));
+      }
+      events.push_back(std::move(e));
+    }
+    return events.size() < want;
+  });
+  return events;
+}
+
+}  // namespace
+
+TEST_F(NaneyedTest, AnEventClientReceivesEveryPairOfAMaxSpeedReplay) {
+  const int n = 150;
+  const auto file = capture(n);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n[pipeline]\nhistory = 256\n");
+  const auto st = wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  EXPECT_EQ(st["source"]["live"], false);
+  EXPECT_EQ(st["counters"]["pairs_dropped"], 0);
+  EXPECT_EQ(st["counters"]["pairs"], n);
+  const auto events = read_events(*client, "/v1/events?last_event_id=0", n);
+  ASSERT_EQ(events.size(), static_cast<std::size_t>(n));
+  const std::int64_t t0 = events[0].data["t_left_ns"].get<std::int64_t>();
+  for (int k = 0; k < n; ++k) {
+    const auto& e = events[static_cast<std::size_t>(k)];
+    ASSERT_EQ(e.type, "result");
+    EXPECT_EQ(e.id, std::to_string(k + 1));
+    EXPECT_EQ(e.data["pair"], k);
+    // The capture's own clock: pair k is k periods after pair 0, the right sensor offset after the left.
+    EXPECT_NEAR(static_cast<double>(e.data["t_left_ns"].get<std::int64_t>() - t0),
+                k * static_cast<double>(truth.period_ticks) * 1e9 / naneye::driver::kTickHz, 1.0);
+    EXPECT_EQ(e.data["t_right_ns"].get<std::int64_t>() - e.data["t_left_ns"].get<std::int64_t>(),
+              truth.offset_ns());
+  }
+  EXPECT_EQ(get_json("/v1/status")["events"]["clients_dropped"], 0);
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
+}
+
+TEST_F(NaneyedTest, AClientTooFarBehindIsDroppedAndThePipelineGoesOn) {
+  const int n = 40;
+  const auto file = capture(n);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n[pipeline]\nhistory = 8\n");
+  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  // Result 1 was overwritten long ago: the client is told and dropped.
+  const auto events = read_events(*client, "/v1/events?last_event_id=0", 1000);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].type, "dropped");
+  EXPECT_EQ(events[0].data["error"], "slow_client");
+  const auto st = get_json("/v1/status");
+  EXPECT_EQ(st["events"]["clients_dropped"], 1);
+  EXPECT_EQ(st["pairs"]["processed"], n);
+  EXPECT_EQ(st["counters"]["pairs_dropped"], 0);
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
+}
+
+TEST_F(NaneyedTest, LiveEventsAreConsecutive) {
+  const auto file = capture(30);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n");
+  wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 2; });
+  const auto events = read_events(*client, "/v1/events", 8);
+  ASSERT_EQ(events.size(), 8u);
+  for (std::size_t i = 1; i < events.size(); ++i) {
+    EXPECT_EQ(std::stoll(events[i].id), std::stoll(events[i - 1].id) + 1);
+    EXPECT_EQ(events[i].data["pair"].get<std::int64_t>(), events[i - 1].data["pair"].get<std::int64_t>() + 1);
+    EXPECT_LT(events[i].data["age_ms"].get<double>(), 1000.0);
+  }
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
+}
+
+TEST_F(NaneyedTest, SigtermWithAnOpenEventStreamExitsZeroWithinASecond) {
+  const auto file = capture(30);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n");
+  wait_status([](const nlohmann::json& s) { return s["state"] == "streaming"; });
+  std::atomic<int> received{0};
+  std::thread sse([&] {
+    httplib::Client c("127.0.0.1", port);
+    c.Get("/v1/events", [&](const char*, std::size_t) {
+      received.fetch_add(1);
+      return true;
+    });
+  });
+  while (received.load() < 3) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const auto [code, took] = daemon->stop(SIGTERM);
+  sse.join();
+  EXPECT_EQ(code, 0) << daemon->log();
+  EXPECT_LT(took.count(), 1000) << daemon->log();
+  EXPECT_NE(daemon->log().find("SIGTERM: stopping"), std::string::npos);
+}
+
+TEST_F(NaneyedTest, SighupReloadsTheCalibrationWithoutDroppingTheStream) {
+  const auto file = capture(30);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n");
+  const auto before = wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 5; });
+  daemon->signal(SIGHUP);
+  const auto after = wait_status([&](const nlohmann::json& s) {
+    return s["calibration"]["reloads"] == 1 &&
+           s["pairs"]["processed"] > before["pairs"]["processed"].get<int>() + 5;
+  });
+  EXPECT_EQ(after["state"], "streaming");
+  EXPECT_EQ(after["source"]["opens"], 1) << "the source was not reopened";
+  EXPECT_EQ(after["counters"]["pairs_dropped"], 0);
+  EXPECT_NE(daemon->log().find("calibration reloaded"), std::string::npos);
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
+}
+
+TEST_F(NaneyedTest, CheckConfigValidatesAndFlagsOverride) {
+  const auto good = dir.path / "good.toml";
+  std::ofstream(good) << "[calibration]\npath = \"" << calib_path() << "\"\n[http]\nport = 8088\n";
+  DaemonProcess ok({"--config", good.string(), "--check-config", "--listen", "127.0.0.1:9999", "--source",
+                    "file:///x.raw"},
+                   dir.path / "ok.log");
+  EXPECT_EQ(ok.wait_exit(), 0) << ok.log();
+  EXPECT_NE(ok.out().find("source file:///x.raw, listen 127.0.0.1:9999"), std::string::npos) << ok.out();
+
+  const auto bad = dir.path / "bad.toml";
+  std::ofstream(bad) << "[calibration]\npath = \"" << calib_path() << "\"\n[pipeline]\nhistroy = 3\n";
+  DaemonProcess refused({"--config", bad.string(), "--check-config"}, dir.path / "bad.log");
+  EXPECT_EQ(refused.wait_exit(), 1);
+  EXPECT_NE(refused.log().find("pipeline.histroy: unknown key"), std::string::npos) << refused.log();
+
+  DaemonProcess bad_flag({"--config", good.string(), "--check-config", "--listen", "nowhere"},
+                         dir.path / "flag.log");
+  EXPECT_EQ(bad_flag.wait_exit(), 1);
+  EXPECT_NE(bad_flag.log().find("--listen: expected HOST:PORT"), std::string::npos) << bad_flag.log();
+
+  DaemonProcess no_calib({"--config", good.string(), "--check-config", "--calib", "/nonexistent.yaml"},
+                         dir.path / "calib.log");
+  EXPECT_EQ(no_calib.wait_exit(), 1);
+  EXPECT_NE(no_calib.log().find("calibration.path: no such file"), std::string::npos) << no_calib.log();
+}
+
+TEST_F(NaneyedTest, TheBundledCaptureIsServedWithItsTruthTimestamps) {
+  const std::string dir_data = std::string(NANEYE_SOURCE_DIR) + "/tests/data/sim-d3-mono/";
+  std::ifstream in(dir_data + "truth.json");
+  const auto truth_json = nlohmann::json::parse(in);
+  const auto& pairs = truth_json.at("pairs");
+  const auto n = pairs.size();
+  start("[source]\nuri = \"file://" + dir_data + "capture.raw?speed=max\"\n");
+  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  const auto events = read_events(*client, "/v1/events?last_event_id=0", n);
+  ASSERT_EQ(events.size(), n);
+  const std::int64_t t0 = events[0].data["t_left_ns"].get<std::int64_t>();
+  const std::int64_t truth0 = pairs[0].at("t_left_ns").get<std::int64_t>();
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& d = events[k].data;
+    EXPECT_EQ(d["pair"], pairs[k].at("pair"));
+    // Sensor times on the capture's own clock (the driver counts from the first record), to 1 ns.
+    EXPECT_NEAR(static_cast<double>(d["t_left_ns"].get<std::int64_t>() - t0),
+                static_cast<double>(pairs[k].at("t_left_ns").get<std::int64_t>() - truth0), 1.0);
+    EXPECT_NEAR(static_cast<double>(d["t_right_ns"].get<std::int64_t>() - d["t_left_ns"].get<std::int64_t>()),
+                static_cast<double>(pairs[k].at("t_right_ns").get<std::int64_t>() -
+                                    pairs[k].at("t_left_ns").get<std::int64_t>()),
+                1.0);
+  }
+  const auto st = get_json("/v1/status");
+  EXPECT_EQ(st["counters"]["pairs_dropped"], 0);
+  EXPECT_EQ(st["counters"]["sync_losses"], 0);
+  EXPECT_EQ(st["state"], "stopped");  // a replay without loop=1 ends
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
+}

@@ -1,0 +1,107 @@
+// The pipeline in-process: a real file:// source at max speed, the worker, and HTTP-like readers
+// hammering the publication at the same time. Part of test_daemon_tsan.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "capture.hpp"
+#include "naneye/daemon/pipeline.hpp"
+#include "naneye/daemon/source_select.hpp"
+#include "naneye/recon/calibration_io.hpp"
+#include "temp_dir.hpp"
+
+using namespace naneye;
+using namespace naneye::daemon::test;
+
+namespace {
+
+std::shared_ptr<const recon::StereoRig> paper_rig() {
+  return std::make_shared<const recon::StereoRig>(
+      recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml"));
+}
+
+}  // namespace
+
+TEST(Pipeline, PublishesEveryPairOfALosslessReplayWhileReadersRead) {
+  TempDir dir;
+  const int n = 60;
+  const auto truth = write_capture(dir.path / "c.raw", n);
+  daemon::Settings settings;
+  settings.history = 128;
+  settings.frame_snapshot_interval_ms = 0;  // every pair: the most contention on the frame slots
+  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+                            {"file://" + (dir.path / "c.raw").string() + "?speed=max", "test", false},
+                            paper_rig());
+  std::atomic<bool> done{false};
+  std::atomic<int> bad{0}, reads{0};
+  auto reader = [&] {
+    std::uint64_t last = 0;
+    while (!done.load()) {
+      pipeline.results().read_latest([&](const daemon::Published& p, std::uint64_t seq) {
+        bad += p.seq != seq || seq < last || p.result.pair + 1 != seq ||
+               p.result.t_right_ns - p.result.t_left_ns != truth.offset_ns();
+        last = seq;
+        ++reads;
+      });
+      pipeline.frames().read_latest([&](const daemon::FrameSnapshot& f, std::uint64_t) {
+        const int k = static_cast<int>(f.pair % n);
+        for (int r : {1, 77, 200})
+          for (int c : {5, 120, 248}) {
+            bad += f.left[static_cast<std::size_t>(r) * 250 + c] != pixel(k, 0, r, c);
+            bad += f.right[static_cast<std::size_t>(r) * 250 + c] != pixel(k, 1, r, c);
+          }
+      });
+      (void)pipeline.status();
+    }
+  };
+  pipeline.start();
+  std::thread a(reader), b(reader);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (pipeline.pairs_processed() < static_cast<std::uint64_t>(n) &&
+         std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  done.store(true);
+  a.join();
+  b.join();
+  ASSERT_EQ(pipeline.pairs_processed(), static_cast<std::uint64_t>(n));
+  EXPECT_EQ(bad.load(), 0);
+  EXPECT_GT(reads.load(), 0);
+  // Every result is still held, in order, each the pair it claims to be.
+  for (std::uint64_t seq = 1; seq <= static_cast<std::uint64_t>(n); ++seq) {
+    EXPECT_TRUE(pipeline.results().read_seq(seq, [&](const daemon::Published& p) {
+      EXPECT_EQ(p.result.pair, seq - 1);
+      EXPECT_GE(p.published_ns, p.capture_ns);
+    })) << seq;
+  }
+  const auto st = pipeline.status();
+  EXPECT_EQ(st.counters.pairs_dropped, 0u);
+  EXPECT_EQ(st.publish_skipped, 0u);
+  EXPECT_NEAR(st.fps_left, truth.fps(), 0.01);
+  EXPECT_EQ(st.offset_ns, truth.offset_ns());
+  EXPECT_EQ(st.recon.count, static_cast<std::uint64_t>(n));
+  pipeline.stop();
+  EXPECT_EQ(pipeline.status().state, daemon::ServiceState::stopped);
+}
+
+TEST(Pipeline, ReloadsTheRigBetweenPairs) {
+  TempDir dir;
+  write_capture(dir.path / "c.raw", 20);
+  daemon::Settings settings;
+  daemon::Pipeline pipeline(
+      settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+      {"file://" + (dir.path / "c.raw").string() + "?speed=realtime&loop=1", "test", false}, paper_rig());
+  pipeline.start();
+  auto other = std::make_shared<recon::StereoRig>(*paper_rig());
+  other->T *= 2.0;
+  const double baseline = other->baseline_mm();
+  pipeline.reload_rig(other);
+  EXPECT_DOUBLE_EQ(pipeline.rig()->baseline_mm(), baseline);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (pipeline.status().calibration_reloads == 0 && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_EQ(pipeline.status().calibration_reloads, 1u);
+  pipeline.stop();
+}
