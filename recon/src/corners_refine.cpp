@@ -9,7 +9,7 @@ namespace naneye::recon {
 namespace {
 
 constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
-constexpr int kMaxHalf = 9;
+constexpr int kMaxHalf = 12;
 constexpr int kMaxPixels = (2 * kMaxHalf + 1) * (2 * kMaxHalf + 1);
 using Vec = Eigen::Matrix<double, kParams, 1>;
 using Mat = Eigen::Matrix<double, kParams, kParams>;
@@ -18,7 +18,7 @@ struct Window {
   int n = 0;
   double inv_half = 1;
   std::array<double, kMaxPixels> dx{}, dy{}, yx{}, yy{}, val{};
-  std::array<bool, kMaxPixels> use{};
+  std::array<double, kMaxPixels> wt{};
 };
 
 // The window's local undistorted coordinates (see the header). A quadratic interpolation of the
@@ -57,7 +57,7 @@ bool local_map(const CameraModel& cam, const Eigen::Vector2d& c, int half, Eigen
 
 struct Eval {
   double cost = 0;
-  int used = 0;
+  double used = 0;  // sum of weights
 };
 
 // Residuals and (optionally) the normal equations of the model at parameters p.
@@ -80,9 +80,9 @@ Eval evaluate(const Window& w, const Vec& p, Mat* JtJ, Vec* Jtr, std::array<doub
     const double S = E1 * E2;
     const double r = p[5] + p[6] * dx + p[7] * dy + C * S - w.val[i];
     if (res) (*res)[i] = r;
-    if (!w.use[i]) continue;
-    e.cost += r * r;
-    ++e.used;
+    const double wt = w.wt[i];
+    e.cost += wt * r * r;
+    e.used += wt;
     if (!JtJ) continue;
     const double G1 = kTwoOverSqrtPi * k * std::exp(-(k * u1) * (k * u1));
     const double G2 = kTwoOverSqrtPi * k * std::exp(-(k * u2) * (k * u2));
@@ -99,8 +99,8 @@ Eval evaluate(const Window& w, const Vec& p, Mat* JtJ, Vec* Jtr, std::array<doub
     J[8] = S;
     J[9] = dx * S;
     J[10] = dy * S;
-    JtJ->selfadjointView<Eigen::Upper>().rankUpdate(J);
-    *Jtr += J * r;
+    JtJ->selfadjointView<Eigen::Upper>().rankUpdate(J, wt);
+    *Jtr += J * (wt * r);
   }
   if (JtJ) *JtJ = JtJ->selfadjointView<Eigen::Upper>();
   return e;
@@ -119,8 +119,8 @@ void init_linear(const Window& w, Vec& p) {
     const double dx = w.dx[i] * w.inv_half, dy = w.dy[i] * w.inv_half;
     Eigen::Matrix<double, 6, 1> J;
     J << 1.0, dx, dy, S, dx * S, dy * S;
-    A.selfadjointView<Eigen::Upper>().rankUpdate(J);
-    rhs += J * w.val[i];
+    A.selfadjointView<Eigen::Upper>().rankUpdate(J, w.wt[i]);
+    rhs += J * (w.wt[i] * w.val[i]);
   }
   A = A.selfadjointView<Eigen::Upper>();
   A.diagonal().array() += 1e-9 * (A.diagonal().maxCoeff() + 1.0);
@@ -162,15 +162,20 @@ int levenberg_marquardt(const Window& w, Vec& p, int max_iterations) {
 
 }  // namespace
 
-bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& init, int half,
+bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& init, double radius,
                 int max_iterations, SaddleFit& out) {
   out = SaddleFit{};
-  if (half < 2 || half > kMaxHalf) return false;
+  // Pixels up to `radius` (Chebyshev distance from the initial corner) weigh 1, with a 1 px linear
+  // taper beyond: the fit then varies continuously with where it starts and with the radius, so
+  // that tracking and full search agree (a hard window jumps when its centre rounds differently).
+  const int half = static_cast<int>(std::ceil(radius)) + 1;
+  if (radius < 1.5 || half > kMaxHalf) return false;
   const int cx = static_cast<int>(std::lround(init.px.x())), cy = static_cast<int>(std::lround(init.px.y()));
   if (cx - half < 0 || cx + half >= img.col_end || cy - half < img.row_begin || cy + half >= img.row_end) {
     return false;
   }
   const Eigen::Vector2d c(cx, cy);
+  const Eigen::Vector2d off = init.px - c;
   Eigen::Vector2d x0 = Eigen::Vector2d::Zero();
   Eigen::Matrix2d Jp = Eigen::Matrix2d::Identity(), L = Eigen::Matrix2d::Identity();
   Eigen::Matrix2d H[2] = {Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero()};
@@ -180,6 +185,9 @@ bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& i
   w.inv_half = 1.0 / half;
   for (int r = -half; r <= half; ++r) {
     for (int q = -half; q <= half; ++q) {
+      const double cheb = std::max(std::abs(q - off.x()), std::abs(r - off.y()));
+      const double wt = std::clamp(radius + 0.5 - cheb, 0.0, 1.0);
+      if (wt <= 0.0) continue;
       const int i = w.n++;
       const Eigen::Vector2d d(q, r);
       Eigen::Vector2d y = d;
@@ -189,7 +197,7 @@ bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& i
       w.yx[i] = y.x();
       w.yy[i] = y.y();
       w.val[i] = img.at(cy + r, cx + q);
-      w.use[i] = true;
+      w.wt[i] = wt;
     }
   }
 
@@ -200,24 +208,9 @@ bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& i
   init_linear(w, p);
   out.iterations = levenberg_marquardt(w, p, max_iterations);
 
-  // Defect pixels (hot or dead, datasheet: < 10 per sensor) bias a least-squares fit: drop pixels
-  // whose residual is far beyond the rest and refit once.
   std::array<double, kMaxPixels> res{};
-  Eval e = evaluate(w, p, nullptr, nullptr, &res);
-  double rms = std::sqrt(e.cost / std::max(1, e.used));
-  int dropped = 0;
-  for (int i = 0; i < w.n; ++i) {
-    if (std::abs(res[i]) > std::max(5.0 * rms, 1e-6)) {
-      w.use[i] = false;
-      ++dropped;
-    }
-  }
-  if (dropped > 0 && dropped <= 4) {
-    out.iterations += levenberg_marquardt(w, p, max_iterations);
-    e = evaluate(w, p, nullptr, nullptr, &res);
-    rms = std::sqrt(e.cost / std::max(1, e.used));
-  }
-  out.outliers = dropped;
+  const Eval e = evaluate(w, p, nullptr, nullptr, &res);
+  const double rms = std::sqrt(e.cost / std::max(1.0, e.used));
   out.theta1 = p[2];
   out.theta2 = p[3];
   out.sigma = p[4];
