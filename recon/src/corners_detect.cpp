@@ -206,7 +206,9 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
         init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
         init.sigma = 0.8;
       }
-      if (!fit_corner(init, fit_radius(std::min(dc.norm(), dr.norm())), fits[i], flags[i])) {
+      // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
+      const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
+      if (!fit_corner(init, r1, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "naneye/recon/corners.hpp"
 
@@ -35,6 +36,8 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
   for (int r = step; r < h - step; ++r) {
     for (int c = step; c < w - step; ++c) {
       const float v = f[r * w + c];
+      // A defect lies beyond every neighbour, so one neighbour within the threshold clears it.
+      if (std::abs(v - f[r * w + c - step]) <= defect_threshold_dn) continue;
       std::array<float, 8> nb;
       std::size_t k = 0;
       for (int dr = -step; dr <= step; dr += step) {

@@ -76,6 +76,8 @@ struct CornerSettings {
   // Fit window radius (pixels, Chebyshev): a fraction of the local corner spacing, within bounds.
   double window_fraction = 0.55;
   double min_radius = 2.5, max_radius = 7.0;
+  // The first of the two fits per corner (from the coarse or previous grid) uses at most this radius.
+  double first_pass_radius = 4.0;
   // Acceptance: fit residual relative to the contrast, minimum contrast (DN, 10-bit), blur bounds.
   double max_relative_residual = 0.12;
   double min_contrast_dn = 40.0;
