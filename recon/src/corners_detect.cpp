@@ -163,9 +163,10 @@ double CornerDetector::fit_radius(double spacing) const {
   return std::clamp(settings_.window_fraction * spacing, settings_.min_radius, settings_.max_radius);
 }
 
-bool CornerDetector::fit_corner(const SaddleInit& init, double radius, SaddleFit& fit, std::uint8_t& flags) {
+bool CornerDetector::fit_corner(const SaddleInit& init, double radius, double tolerance_px, SaddleFit& fit,
+                                std::uint8_t& flags) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  bool ok = fit_saddle(v, camera_, init, radius, 50, fit);
+  bool ok = fit_saddle(v, camera_, init, radius, 50, fit, tolerance_px);
   while (!ok && radius > settings_.min_radius) {
     const int half = static_cast<int>(std::ceil(radius)) + 1;
     const int cx = static_cast<int>(std::lround(init.px.x())),
@@ -175,7 +176,19 @@ bool CornerDetector::fit_corner(const SaddleInit& init, double radius, SaddleFit
     if (!at_edge) break;
     radius = std::max(radius - 1.0, settings_.min_radius);
     flags |= kCornerNearEdge;
-    ok = fit_saddle(v, camera_, init, radius, 50, fit);
+    ok = fit_saddle(v, camera_, init, radius, 50, fit, tolerance_px);
+  }
+  // A start far from the optimum can let the blur collapse (the erf turns into a step and its
+  // gradient vanishes): retry once from a wide blur before giving up on the corner.
+  const bool poor = ok && (fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < 0.1);
+  if (!ok || poor) {
+    SaddleInit wide = init;
+    wide.sigma = 1.2;
+    SaddleFit retry;
+    if (fit_saddle(v, camera_, wide, radius, 50, retry, tolerance_px) && (!ok || retry.rms < fit.rms)) {
+      fit = retry;
+      ok = true;
+    }
   }
   return ok;
 }
@@ -208,7 +221,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       }
       // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
       const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
-      if (!fit_corner(init, r1, fits[i], flags[i])) {
+      if (!fit_corner(init, r1, 1e-2, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }
@@ -227,7 +240,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
       const SaddleInit again{fits[i].px, fits[i].theta1, fits[i].theta2, fits[i].sigma};
       flags[i] = 0;
-      if (!fit_corner(again, radius, fits[i], flags[i])) {
+      if (!fit_corner(again, radius, 1e-4, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }

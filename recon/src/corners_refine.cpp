@@ -156,7 +156,7 @@ void init_linear(const Window& w, Vec& p) {
   p.segment<6>(5) = sol;
 }
 
-int levenberg_marquardt(Window& w, Vec& p, int max_iterations) {
+int levenberg_marquardt(Window& w, Vec& p, int max_iterations, double tolerance_px) {
   Mat JtJ;
   Vec Jtr;
   double cost = evaluate(w, p, &JtJ, &Jtr, nullptr).cost;
@@ -176,8 +176,7 @@ int levenberg_marquardt(Window& w, Vec& p, int max_iterations) {
       p = cand;
       JtJ = JtJ2;
       Jtr = Jtr2;
-      // 1e-4 px: two orders below the noise-limited accuracy.
-      const bool small = step.head<2>().norm() < 1e-4;
+      const bool small = step.head<2>().norm() < tolerance_px;
       cost = c2;
       lambda = std::max(lambda * 0.2, 1e-9);
       if (small) break;
@@ -192,7 +191,7 @@ int levenberg_marquardt(Window& w, Vec& p, int max_iterations) {
 }  // namespace
 
 bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& init, double radius,
-                int max_iterations, SaddleFit& out) {
+                int max_iterations, SaddleFit& out, double tolerance_px) {
   out = SaddleFit{};
   // Pixels up to `radius` (Chebyshev distance from the initial corner) weigh 1, with a 1 px linear
   // taper beyond: the fit then varies continuously with where it starts and with the radius, so
@@ -235,7 +234,7 @@ bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& i
   const Eigen::Vector2d q0 = undist ? Eigen::Vector2d(L * d0) : d0;
   p << q0.x(), q0.y(), init.theta1, init.theta2, init.sigma, 0, 0, 0, 0, 0, 0;
   init_linear(w, p);
-  out.iterations = levenberg_marquardt(w, p, max_iterations);
+  out.iterations = levenberg_marquardt(w, p, max_iterations, tolerance_px);
 
   std::array<double, kMaxPixels> res{};
   const Eval e = evaluate(w, p, nullptr, nullptr, &res);

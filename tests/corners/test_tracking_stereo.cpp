@@ -57,7 +57,7 @@ TEST(CornerTracking, LargeJumpFallsBackToFullSearch) {
   sim::Pose pose = test::random_pose(rng, 68, 72, 10, 0);
   const sim::RenderedPair a = test::render(false, pose, 1);
   CornerResult prev, res;
-  ASSERT_TRUE(det.detect_full(test::view_of(a.left, false), prev));
+  ASSERT_TRUE(det.detect_full(test::view_of(a.left, false), prev)) << to_string(det.last_failure());
   pose.t += pose.R.col(0) * 5.99;
   const sim::RenderedPair b = test::render(false, pose, 2);
   ASSERT_TRUE(det.detect(test::view_of(b.left, false), &prev, res));

@@ -111,7 +111,8 @@ class CornerDetector {
   bool full_search(CornerResult& out);
   bool refine_all(CornerResult& out, bool from_previous);
   double fit_radius(double spacing) const;
-  bool fit_corner(const SaddleInit& init, double radius, SaddleFit& fit, std::uint8_t& flags);
+  bool fit_corner(const SaddleInit& init, double radius, double tolerance_px, SaddleFit& fit,
+                  std::uint8_t& flags);
   bool validate(const CornerResult& out);
 
   CameraModel camera_;

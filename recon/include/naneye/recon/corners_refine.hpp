@@ -44,8 +44,10 @@ struct LumaView {
 
 // Fits one corner with the pixels within `radius` (Chebyshev, from init.px; a 1 px taper beyond).
 // Returns false when the window does not fit in the usable area or the fit diverges (left the
-// window, degenerate edges). `max_iterations` bounds the LM iterations.
+// window, degenerate edges). `max_iterations` bounds the LM iterations; the fit stops when the
+// corner moves less than `tolerance_px` in one step (default 1e-4 px: two orders below the
+// noise-limited accuracy).
 bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& init, double radius,
-                int max_iterations, SaddleFit& out);
+                int max_iterations, SaddleFit& out, double tolerance_px = 1e-4);
 
 }  // namespace naneye::recon
