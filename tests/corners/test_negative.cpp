@@ -11,7 +11,7 @@ namespace {
 TEST(CornerNegative, NoBoardNothingFound) {
   const StereoRig& rig = test::paper_d3();
   CornerDetector det(rig.left);
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < 2; ++k) {
     const bool bayer = k % 2 == 1;
     const sim::RenderedPair p =
         test::render(bayer, sim::Pose{}, 100 + static_cast<std::uint64_t>(k), test::Scene::no_board);
@@ -29,10 +29,10 @@ TEST(CornerNegative, BoardCutByEdgeGivesNoFalseCorner) {
   std::mt19937_64 rng(77);
   int cut = 0, found = 0, false_corners = 0;
   const double kPi = 3.14159265358979323846;
-  for (int k = 0; k < 12; ++k) {
+  for (int k = 0; k < 6; ++k) {
     sim::Pose pose = test::random_pose(rng, 58, 85, 30, 0);
     // Shift the grid centre towards one side by 50-70 % of the distance (the image spans ~ +-0.7).
-    const double dir = 2 * kPi * k / 12;
+    const double dir = 2 * kPi * k / 6 + 0.3;
     const double shift = (0.50 + 0.10 * (k % 3)) * pose.t.z();
     pose.t += Eigen::Vector3d(std::cos(dir) * shift, std::sin(dir) * shift, 0);
     const bool bayer = k % 2 == 1;
@@ -45,7 +45,7 @@ TEST(CornerNegative, BoardCutByEdgeGivesNoFalseCorner) {
     if (test::max_error(res, p.truth.left_px, test::best_turn(res, p.truth.left_px)) > 0.5) ++false_corners;
   }
   std::printf("cut boards: %d, found anyway: %d, with a false corner: %d\n", cut, found, false_corners);
-  EXPECT_GE(cut, 10);
+  EXPECT_GE(cut, 5);
   EXPECT_EQ(found, 0);
   EXPECT_EQ(false_corners, 0);
 }
@@ -55,7 +55,7 @@ TEST(CornerNegative, SmallerBoardNotFound) {
   const StereoRig& rig = test::paper_d3();
   CornerDetector det(rig.left);
   std::mt19937_64 rng(9);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 2; ++k) {
     const sim::Pose pose = test::random_pose(rng);
     const sim::RenderedPair p =
         test::render(false, pose, 300 + static_cast<std::uint64_t>(k), test::Scene::small_board);

@@ -18,8 +18,8 @@ TEST(CornerTracking, TrackedEqualsFullSearch) {
   CornerResult prev, tracked, full;
   int n_tracked = 0;
   double worst_diff = 0;
-  for (int f = 0; f < 8; ++f) {
-    const bool bayer = f >= 4;
+  for (int f = 0; f < 5; ++f) {
+    const bool bayer = f >= 3;
     const sim::RenderedPair p = test::render(bayer, pose, 400 + static_cast<std::uint64_t>(f));
     const RawImageView v = test::view_of(p.left, bayer);
     ASSERT_TRUE(det.detect_full(v, full)) << "frame " << f;
@@ -41,8 +41,8 @@ TEST(CornerTracking, TrackedEqualsFullSearch) {
     pose.t += Eigen::Vector3d(0.15, -0.1, 0.3);
     pose.R = Eigen::AngleAxisd(0.007, Eigen::Vector3d(0.3, 1, 0).normalized()).toRotationMatrix() * pose.R;
   }
-  std::printf("tracked %d of 7 frames, worst |tracked - full| = %.2e px\n", n_tracked, worst_diff);
-  EXPECT_EQ(n_tracked, 7);
+  std::printf("tracked %d of 4 frames, worst |tracked - full| = %.2e px\n", n_tracked, worst_diff);
+  EXPECT_EQ(n_tracked, 4);
   // Windows are sized from the fitted grid's spacing in whole pixels; a spacing within ~0.01 px of
   // a size step can give the two paths windows one pixel apart: a few 1e-3 px, 10x below the target.
   EXPECT_LE(worst_diff, 5e-3);
@@ -73,9 +73,9 @@ TEST(CornerStereo, SameIdsInBothEyes) {
   std::mt19937_64 rng(31);
   int pairs = 0, flipped = 0;
   const double kPi = 3.14159265358979323846;
-  for (int k = 0; k < 8; ++k) {
+  for (int k = 0; k < 5; ++k) {
     sim::Pose pose = test::random_pose(rng, 60, 80, 15, 2);
-    const double spin = (42.0 + 6.0 * k / 7.0) * kPi / 180;
+    const double spin = (42.0 + 6.0 * k / 4.0) * kPi / 180;
     const Eigen::Vector3d centre_board = sim::BoardGeometry{}.centre();
     const Eigen::Vector3d centre = pose.R * centre_board + pose.t;
     pose.R = pose.R * Eigen::AngleAxisd(spin, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -102,7 +102,7 @@ TEST(CornerStereo, SameIdsInBothEyes) {
     EXPECT_GT(check.epipolar_rms_other_px, 10.0);
   }
   std::printf("stereo pairs: %d, right numbering turned: %d\n", pairs, flipped);
-  EXPECT_GE(pairs, 6);
+  EXPECT_GE(pairs, 4);
 }
 
 // A numbering turned on purpose in one eye is turned back; a pair of unrelated detections is refused.
