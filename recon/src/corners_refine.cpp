@@ -9,7 +9,7 @@ namespace naneye::recon {
 namespace {
 
 constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
-constexpr int kMaxHalf = 12;
+constexpr int kMaxHalf = 9;  // radius <= 8: the work space lives on the stack (~90 KB)
 constexpr int kMaxPixels = (2 * kMaxHalf + 1) * (2 * kMaxHalf + 1);
 using Vec = Eigen::Matrix<double, kParams, 1>;
 using Mat = Eigen::Matrix<double, kParams, kParams>;

@@ -75,7 +75,7 @@ struct CornerSettings {
   int rows = 6, cols = 8;  // inner corners of the paper's 9 x 7 squares board (7 x 9 held landscape)
   // Fit window radius (pixels, Chebyshev): a fraction of the local corner spacing, within bounds.
   double window_fraction = 0.55;
-  double min_radius = 2.5, max_radius = 7.0;
+  double min_radius = 2.5, max_radius = 7.0;  // max_radius <= 8 (fit_saddle's work space)
   // The first of the two fits per corner (from the coarse or previous grid) uses at most this radius.
   double first_pass_radius = 4.0;
   // Acceptance: fit residual relative to the contrast, minimum contrast (DN, 10-bit), blur bounds.
