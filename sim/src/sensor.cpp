@@ -59,10 +59,16 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
     cv::GaussianBlur(scratch.light, scratch.blurred, cv::Size(k, k), sigma, sigma, cv::BORDER_REPLICATE);
     light = &scratch.blurred;
   }
-  std::normal_distribution<float> normal(0.0f, 1.0f);
+  if (sensor_.noise) {
+    // One seed from the caller's generator, the per-pixel normals from OpenCV's (fast in every build).
+    cv::RNG cv_rng(rng());
+    scratch.noise.create(kSize, kSize, CV_32FC1);
+    cv_rng.fill(scratch.noise, cv::RNG::NORMAL, 0.0, 1.0);
+  }
   const auto& g = sensor_.channel_gain;
   for (int r = 0; r < kSize; ++r) {
     const float* in = light->ptr<float>(r);
+    const float* n01 = sensor_.noise ? scratch.noise.ptr<float>(r) : nullptr;
     std::uint16_t* o = out + static_cast<std::size_t>(r) * kSize;
     for (int c = 0; c < kSize; ++c) {
       double gain = 1.0;
@@ -74,7 +80,7 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
         // Shot noise: variance signal * gain (e-) -> signal / gain_e_per_dn in DN^2; plus read noise.
         const double sd =
             std::sqrt(signal / sensor_.gain_e_per_dn + sensor_.read_noise_dn * sensor_.read_noise_dn);
-        dn += sd * normal(rng);
+        dn += sd * n01[c];
       }
       o[c] =
           static_cast<std::uint16_t>(std::clamp(std::lround(dn), 0L, static_cast<long>(driver::kPixelMax)));

@@ -63,7 +63,9 @@ class Renderer {
 
   // Working images reused from frame to frame by render_into (one per rendering thread).
   struct Scratch {
-    cv::Mat light, blurred;
+    cv::Mat light, blurred, noise;
+    std::vector<int> cells;
+    std::vector<float> board_part, background_part;
   };
 
   RenderedPair render(const Pose& board, Rng& rng) const;
@@ -71,20 +73,30 @@ class Renderer {
   // steady stream of frames allocates nothing of its own.
   void render_into(const Pose& board, Rng& rng, std::uint16_t* left, std::uint16_t* right,
                    Scratch& scratch) const;
+  // The same without any board (background only), whatever scene().board_present says.
+  void render_background_into(Rng& rng, std::uint16_t* left, std::uint16_t* right, Scratch& scratch) const;
   // The light reaching each pixel before the sensor (CV_32FC1, 1.0 = a white square facing the
   // camera on axis at the light's reference distance): scene radiance integrated over the pixel,
   // with the lighting and, if the sensor has it, the vignetting. No blur, noise or quantisation.
   cv::Mat irradiance(Eye eye, const Pose& board) const;
 
  private:
+  // Exact rays (CameraModel::undistort) where the renderer needs them, computed once per camera.
   struct RayTable {
-    int n = 0;
-    std::vector<float> sub;     // per pixel n*n (x, y) normalized rays; NaN beyond the fold
-    std::vector<float> centre;  // per pixel the centre's ray; NaN beyond the fold
-    std::vector<float> cos4;    // per pixel cos^4 of the centre ray's angle (0 beyond the fold)
+    std::vector<double> corner;       // (250 + 1)^2 pixel corners, (x, y) normalized; NaN beyond the fold
+    std::vector<float> centre;        // per pixel: its centre's ray (mean valid sub-sample ray at the fold)
+    std::vector<float> cos4;          // per pixel: cos^4 of that ray's angle to the axis (0: no ray)
+    std::vector<int> fold_pixels;     // pixels with a corner beyond (or too near) the fold ...
+    std::vector<std::uint8_t> exact;  // per pixel: 1 for the fold pixels
+    std::vector<float> fold_rays;     // ... and their sub-sample rays, kFoldSamplesPerSide^2 each, NaN beyond
   };
-  static RayTable build_rays(const recon::CameraModel& cam, int n);
-  void irradiance_into(Eye eye, const Pose& board, float* out) const;
+  struct Bilinear {
+    double w00, w01, w10, w11;
+  };
+  static constexpr int kFoldSamplesPerSide = 8;
+  static constexpr double kMaxInterpolationErrorPx = 5e-3;
+  static RayTable build_rays(const recon::CameraModel& cam);
+  void irradiance_into(Eye eye, const Pose& board, bool present, Scratch& scratch, float* out) const;
   void sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* out) const;
   void init_defects();
 
@@ -92,7 +104,8 @@ class Renderer {
   SceneSettings scene_;
   SensorSettings sensor_;
   RayTable rays_[2];
-  std::vector<int> defects_[2];  // pixel indices; value in defect_values_
+  std::vector<Bilinear> edge_weights_;  // edge sub-samples as weights of the pixel's corner rays
+  std::vector<int> defects_[2];         // pixel indices; value in defect_values_
   std::vector<std::uint16_t> defect_values_[2];
 };
 

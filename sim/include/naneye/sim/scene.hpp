@@ -43,8 +43,9 @@ struct SceneSettings {
   bool lighting = true;
   Eigen::Vector3d light_mm{0.6, -0.9, 0.0};
   double light_reference_mm = 70.0;
-  // Samples per pixel side: each pixel integrates n x n points spread over its area.
-  int supersample = 4;
+  // Pixels an edge crosses integrate n^2 points of a rank-1 lattice over their area (every point
+  // on its own row and column: edges resolved to 1/n^2 px); uniform pixels need one. See docs.
+  int supersample = 16;
   bool board_present = true;  // false renders the background only
 };
 

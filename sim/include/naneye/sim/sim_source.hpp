@@ -1,0 +1,62 @@
+#pragma once
+// sim://PRESET?fps=50&motion=orbit: a live FrameSource rendering a board on a smooth trajectory in
+// its own thread. The pairs take the real driver path: records are encoded to the spec's bytes and
+// fed to driver::ByteStreamSource (parser -> pairer -> pool -> lock-free ring -> next()), so the
+// counters, the raw tap (naneye record) and the hand-over behave exactly as with a camera.
+//
+//   sim://paper-d1|paper-d2|paper-d3
+//     ?fps=<43..62>           nominal frame rate (drifts within 43-62 fps, as the sensors do)
+//     &motion=orbit|sweep|still
+//     &seed=<n>               noise and timing; the same seed gives the same pairs
+//     &bayer=0|1  &noise=0|1  (noise=0: ideal sensor, uniform light)
+//     &pairs=<n>              stop after n pairs (0: endless)
+//     &speed=realtime|max     max: render as fast as possible, lossless hand-over
+//   plus the stream parameters of every byte-stream source (color, tolerance_ms, reference).
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "naneye/driver/byte_stream_source.hpp"
+#include "naneye/driver/source_registry.hpp"
+#include "naneye/driver/source_uri.hpp"
+#include "naneye/sim/presets.hpp"
+
+namespace naneye::sim {
+
+enum class Motion { orbit, sweep, still };
+
+struct SimSourceOptions {
+  std::string preset = "paper-d3";
+  double fps = 50;
+  Motion motion = Motion::orbit;
+  std::uint64_t seed = 1;
+  bool bayer = false;
+  bool noise = true;
+  std::uint64_t pairs = 0;
+  bool realtime = true;
+  driver::StreamSettings stream;
+};
+
+SimSourceOptions parse_sim_uri(const driver::SourceUri& uri);
+
+// The board pose at time t (s) on a trajectory around the preset's distance.
+Pose trajectory_pose(Motion m, const BoardGeometry& board, double distance_mm, double t);
+
+class SimSource : public driver::ByteStreamSource {
+ public:
+  explicit SimSource(SimSourceOptions options, std::string uri_text = {});
+  ~SimSource() override;
+
+ protected:
+  void open() override;
+  void run() override;
+
+ private:
+  SimSourceOptions options_;
+  std::unique_ptr<Renderer> renderer_;
+};
+
+// Adds the "sim" scheme to a registry.
+void register_sim_source(driver::SourceRegistry& registry);
+
+}  // namespace naneye::sim

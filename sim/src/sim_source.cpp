@@ -1,0 +1,168 @@
+// The live simulator source: render, encode, feed the driver's byte-stream path, pace to the clock.
+#include "naneye/sim/sim_source.hpp"
+
+#include <Eigen/Geometry>
+#include <charconv>
+#include <cmath>
+#include <vector>
+
+#include "log.hpp"
+#include "naneye/recon/calibration_io.hpp"
+#include "naneye/sim/stream.hpp"
+
+namespace naneye::sim {
+namespace {
+
+template <typename T>
+T number(const driver::SourceUri& uri, const char* name, T fallback, T lo, T hi) {
+  const auto v = uri.param(name);
+  if (!v) return fallback;
+  T out{};
+  const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), out);
+  if (ec != std::errc() || end != v->data() + v->size() || out < lo || out > hi)
+    throw driver::SourceError("sim: parameter " + std::string(name) + "=" + *v + " is not a number in [" +
+                              std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return out;
+}
+
+bool flag(const driver::SourceUri& uri, const char* name, bool fallback) {
+  const auto v = uri.param(name);
+  if (!v) return fallback;
+  if (*v == "1" || *v == "true") return true;
+  if (*v == "0" || *v == "false") return false;
+  throw driver::SourceError("sim: parameter " + std::string(name) + "=" + *v + " must be 0 or 1");
+}
+
+}  // namespace
+
+SimSourceOptions parse_sim_uri(const driver::SourceUri& uri) {
+  uri.allow_only(
+      {"fps", "motion", "seed", "bayer", "noise", "pairs", "speed", "color", "tolerance_ms", "reference"});
+  SimSourceOptions o;
+  o.preset = uri.target.empty() ? "paper-d3" : uri.target;
+  if (!find_preset(o.preset))
+    throw driver::SourceError("sim: unknown preset '" + o.preset + "' (paper-d1, paper-d2, paper-d3)");
+  o.fps = number(uri, "fps", 50.0, 43.0, 62.0);
+  if (const auto m = uri.param("motion")) {
+    if (*m == "orbit")
+      o.motion = Motion::orbit;
+    else if (*m == "sweep")
+      o.motion = Motion::sweep;
+    else if (*m == "still")
+      o.motion = Motion::still;
+    else
+      throw driver::SourceError("sim: motion=" + *m + " (orbit, sweep, still)");
+  }
+  o.seed = number<std::uint64_t>(uri, "seed", 1, 0, UINT64_MAX);
+  o.bayer = flag(uri, "bayer", false);
+  o.noise = flag(uri, "noise", true);
+  o.pairs = number<std::uint64_t>(uri, "pairs", 0, 0, UINT64_MAX);
+  if (const auto s = uri.param("speed")) {
+    if (*s != "realtime" && *s != "max") throw driver::SourceError("sim: speed=" + *s + " (realtime, max)");
+    o.realtime = *s == "realtime";
+  }
+  driver::StreamSettings defaults;
+  defaults.parser.color = o.bayer ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
+  o.stream = driver::parse_stream_params(uri, defaults);
+  return o;
+}
+
+Pose trajectory_pose(Motion m, const BoardGeometry& board, double distance_mm, double t) {
+  const double two_pi = 2.0 * M_PI, deg = M_PI / 180.0;
+  double z = distance_mm, tilt = 0, axis = 0, roll = 0;
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();  // normalized
+  switch (m) {
+    case Motion::orbit:  // the centre circles the axis while the board wobbles: every tilt direction
+      z = distance_mm * (1.0 + 0.08 * std::sin(two_pi * t / 7.0));
+      offset = 0.06 * Eigen::Vector2d(std::cos(two_pi * t / 5.0), std::sin(two_pi * t / 5.0));
+      tilt = 25 * deg;
+      axis = two_pi * t / 5.0 + M_PI / 2;
+      roll = 10 * deg * std::sin(two_pi * t / 11.0);
+      break;
+    case Motion::sweep:  // towards and away from the cameras
+      z = distance_mm * (1.02 + 0.16 * std::sin(two_pi * t / 6.0));
+      tilt = 15 * deg;
+      axis = 0.3;
+      break;
+    case Motion::still:
+      tilt = 20 * deg;
+      axis = 0.5;
+      break;
+  }
+  Pose p;
+  p.R = (Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(axis), std::sin(axis), 0)) *
+         Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()))
+            .toRotationMatrix();
+  p.t = Eigen::Vector3d(offset.x() * z, offset.y() * z, z) - p.R * board.centre();
+  return p;
+}
+
+SimSource::SimSource(SimSourceOptions options, std::string uri_text)
+    : driver::ByteStreamSource(driver::SourceInfo{uri_text.empty() ? "sim://" + options.preset : uri_text,
+                                                  "sim", options.preset, options.realtime, options.fps},
+                               options.stream),
+      options_(std::move(options)) {}
+
+SimSource::~SimSource() {
+  stop();
+}
+
+void SimSource::open() {
+  const Preset preset = *find_preset(options_.preset);
+  recon::StereoRig rig;
+  try {
+    rig = recon::load_rig(find_calibration(preset.calib_file));
+  } catch (const std::exception& e) {
+    throw driver::SourceError(std::string("sim: ") + e.what());
+  }
+  SceneSettings scene = preset_scene(preset);
+  SensorSettings sensor = options_.noise ? SensorSettings{} : SensorSettings::ideal();
+  if (!options_.noise) scene.lighting = false;
+  sensor.bayer = options_.bayer;
+  renderer_ = std::make_unique<Renderer>(rig, scene, sensor);
+}
+
+void SimSource::run() {
+  const Preset preset = *find_preset(options_.preset);
+  Rng rng(options_.seed);
+  TimingSettings timing;
+  timing.fps_start = options_.fps;
+  const std::uint64_t start_ticks = rng() % (std::uint64_t{1} << 32);
+  FrameClock clock(timing, start_ticks, rng);
+  RecordWriter writer([this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, monotonic_ns()); }, {},
+                      0, static_cast<std::uint8_t>(rng()));
+  std::vector<std::uint16_t> left(driver::kPixelCount), right(driver::kPixelCount);
+  Renderer::Scratch scratch;
+  const auto t0 = std::chrono::steady_clock::now();
+  log()->info("sim://{}: {} fps, rendering", options_.preset, options_.fps);
+  for (std::uint64_t i = 0; options_.pairs == 0 || i < options_.pairs; ++i) {
+    if (stopping()) return;
+    const PairTime pt = clock.next(rng);
+    const double t = static_cast<double>(pt.left_ticks - start_ticks) / driver::kTickHz;
+    renderer_->render_into(trajectory_pose(options_.motion, renderer_->scene().board, preset.distance_mm, t),
+                           rng, left.data(), right.data(), scratch);
+    // A record is complete when its frame has been read out: pace each to its sensor time.
+    for (int eye = 0; eye < 2; ++eye) {
+      const std::uint64_t ticks = eye == 0 ? pt.left_ticks : pt.right_ticks;
+      if (options_.realtime) {
+        const auto due = t0 + std::chrono::nanoseconds(static_cast<std::int64_t>(
+                                  static_cast<double>(ticks - start_ticks) * 1e9 / driver::kTickHz));
+        if (!sleep_until(due)) return;
+      }
+      writer.write(eye == 0 ? driver::Sensor::left : driver::Sensor::right, static_cast<std::uint32_t>(ticks),
+                   std::span<const std::uint16_t, driver::kPixelCount>((eye == 0 ? left : right).data(),
+                                                                       driver::kPixelCount),
+                   0);
+      writer.finish();  // hand the record over now: a live source never holds one back
+    }
+  }
+  end_of_stream(monotonic_ns());
+}
+
+void register_sim_source(driver::SourceRegistry& registry) {
+  registry.add("sim", [](const driver::SourceUri& uri) -> std::unique_ptr<driver::FrameSource> {
+    return std::make_unique<SimSource>(parse_sim_uri(uri), uri.text);
+  });
+}
+
+}  // namespace naneye::sim
