@@ -1,0 +1,294 @@
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "naneye/recon/corners.hpp"
+#include "naneye/recon/corners_grid.hpp"
+#include "naneye/recon/corners_refine.hpp"
+
+namespace naneye::recon {
+
+namespace {
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Sum of the grid's outer edges along columns and along rows.
+void grid_axes(const CornerResult& r, Eigen::Vector2d& col_dir, Eigen::Vector2d& row_dir) {
+  const int R = r.rows - 1, C = r.cols - 1;
+  col_dir = (r.at(0, C).px - r.at(0, 0).px) + (r.at(R, C).px - r.at(R, 0).px);
+  row_dir = (r.at(R, 0).px - r.at(0, 0).px) + (r.at(R, C).px - r.at(0, C).px);
+}
+
+void renumber(CornerResult& r) {
+  for (int i = 0; i < r.count; ++i) {
+    r.corners[static_cast<std::size_t>(i)].row = i / r.cols;
+    r.corners[static_cast<std::size_t>(i)].col = i % r.cols;
+  }
+}
+}  // namespace
+
+const char* to_string(CornerFailure f) {
+  switch (f) {
+    case CornerFailure::none:
+      return "none";
+    case CornerFailure::bad_input:
+      return "bad_input";
+    case CornerFailure::no_grid:
+      return "no_grid";
+    case CornerFailure::fit_failed:
+      return "fit_failed";
+    case CornerFailure::fit_rejected:
+      return "fit_rejected";
+    case CornerFailure::polarity:
+      return "polarity";
+    case CornerFailure::not_planar:
+      return "not_planar";
+    case CornerFailure::track_moved:
+      return "track_moved";
+  }
+  return "unknown";
+}
+
+void canonical_order(CornerResult& r) {
+  if (r.count != r.rows * r.cols || r.rows < 2 || r.cols < 2) return;
+  Eigen::Vector2d col_dir, row_dir;
+  grid_axes(r, col_dir, row_dir);
+  // Seen from the front, a board frame (u along columns, v along rows, z into the board) is
+  // right-handed only when u x v > 0 in the image (y down); OpenCV may return the mirrored order.
+  if (cross2(col_dir, row_dir) < 0) {
+    for (int row = 0; row < r.rows / 2; ++row) {
+      for (int col = 0; col < r.cols; ++col) {
+        std::swap(r.corners[static_cast<std::size_t>(row * r.cols + col)],
+                  r.corners[static_cast<std::size_t>((r.rows - 1 - row) * r.cols + col)]);
+      }
+    }
+    grid_axes(r, col_dir, row_dir);
+  }
+  const bool horizontal = std::abs(col_dir.x()) >= std::abs(col_dir.y());
+  const double along = horizontal ? col_dir.x() : col_dir.y();
+  if (along < 0) std::reverse(r.corners.begin(), r.corners.begin() + r.count);
+  renumber(r);
+}
+
+CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& settings)
+    : camera_(camera), settings_(settings), width_(camera.width()), height_(camera.height()) {
+  luma_.resize(static_cast<std::size_t>(width_) * height_);
+  scratch_.resize(luma_.size());
+  gray8_.resize(luma_.size());
+  coarse_.reserve(kMaxCorners);
+}
+
+bool CornerDetector::detect(const RawImageView& image, const CornerResult* previous, CornerResult& out) {
+  out.found = false;
+  out.tracked = false;
+  out.count = 0;
+  out.rows = settings_.rows;
+  out.cols = settings_.cols;
+  failure_ = CornerFailure::none;
+  if (image.width != width_ || image.height != height_ || !image.data ||
+      settings_.rows * settings_.cols > kMaxCorners) {
+    failure_ = CornerFailure::bad_input;
+    return false;
+  }
+  raw_to_luminance(image, luma_.data(), scratch_.data());
+  row_begin_ = image.ignore_edge_rows;
+  row_end_ = height_ - image.ignore_edge_rows;
+  col_end_ = width_ - image.ignore_last_cols;
+  if (previous && previous->found && previous->rows == settings_.rows && previous->cols == settings_.cols) {
+    if (track(*previous, out)) return true;
+    out.found = false;
+    out.count = 0;
+  }
+  return full_search(out);
+}
+
+bool CornerDetector::track(const CornerResult& previous, CornerResult& out) {
+  out.count = previous.count;
+  out.corners = previous.corners;
+  if (!refine_all(out, true)) return false;
+  for (int i = 0; i < out.count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    // A corner that moved by a sizeable part of the spacing may have locked onto its neighbour,
+    // which would shift every id: refuse and search afresh.
+    if ((out.corners[k].px - previous.corners[k].px).norm() > settings_.max_track_motion_px) {
+      failure_ = CornerFailure::track_moved;
+      return false;
+    }
+  }
+  if (!validate(out)) return false;
+  out.found = true;
+  out.tracked = true;
+  return true;
+}
+
+bool CornerDetector::full_search(CornerResult& out) {
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  if (!coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_)) {
+    failure_ = CornerFailure::no_grid;
+    return false;
+  }
+  out.count = settings_.rows * settings_.cols;
+  for (int i = 0; i < out.count; ++i) {
+    Corner& c = out.corners[static_cast<std::size_t>(i)];
+    c = Corner{};
+    c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
+  }
+  canonical_order(out);
+  if (!refine_all(out, false) || !validate(out)) {
+    out.count = 0;
+    return false;
+  }
+  out.found = true;
+  return true;
+}
+
+namespace {
+struct Grid {
+  const std::array<Eigen::Vector2d, kMaxCorners>& p;
+  int rows, cols;
+  const Eigen::Vector2d& at(int r, int c) const { return p[static_cast<std::size_t>(r * cols + c)]; }
+  // Grid steps along the row (to the next column) and along the column, one-sided at the border.
+  void steps(int r, int c, Eigen::Vector2d& dc, Eigen::Vector2d& dr) const {
+    const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, cols - 1);
+    const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, rows - 1);
+    dc = (at(r, c1) - at(r, c0)) / (c1 - c0);
+    dr = (at(r1, c) - at(r0, c)) / (r1 - r0);
+  }
+};
+}  // namespace
+
+double CornerDetector::fit_radius(double spacing) const {
+  // The window must not reach the neighbouring corners' edges (blur included).
+  return std::clamp(settings_.window_fraction * spacing, settings_.min_radius, settings_.max_radius);
+}
+
+bool CornerDetector::fit_corner(const SaddleInit& init, double radius, double tolerance_px, SaddleFit& fit,
+                                std::uint8_t& flags) {
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  bool ok = fit_saddle(v, camera_, init, radius, 50, fit, tolerance_px);
+  while (!ok && radius > settings_.min_radius) {
+    const int half = static_cast<int>(std::ceil(radius)) + 1;
+    const int cx = static_cast<int>(std::lround(init.px.x())),
+              cy = static_cast<int>(std::lround(init.px.y()));
+    const bool at_edge =
+        cx - half < 0 || cx + half >= col_end_ || cy - half < row_begin_ || cy + half >= row_end_;
+    if (!at_edge) break;
+    radius = std::max(radius - 1.0, settings_.min_radius);
+    flags |= kCornerNearEdge;
+    ok = fit_saddle(v, camera_, init, radius, 50, fit, tolerance_px);
+  }
+  // A start far from the optimum can let the blur collapse (the erf turns into a step and its
+  // gradient vanishes): retry once from a wide blur before giving up on the corner.
+  const bool poor = ok && (fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < 0.1);
+  if (!ok || poor) {
+    SaddleInit wide = init;
+    wide.sigma = 1.2;
+    SaddleFit retry;
+    if (fit_saddle(v, camera_, wide, radius, 50, retry, tolerance_px) && (!ok || retry.rms < fit.rms)) {
+      fit = retry;
+      ok = true;
+    }
+  }
+  return ok;
+}
+
+bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
+  constexpr double kHalfPi = 1.57079632679489661923;
+  const std::size_t n = static_cast<std::size_t>(out.count);
+  std::array<Eigen::Vector2d, kMaxCorners> start, first;
+  std::array<SaddleFit, kMaxCorners> fits;
+  std::array<std::uint8_t, kMaxCorners> flags{};
+  for (std::size_t i = 0; i < n; ++i) start[i] = out.corners[i].px;
+  // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing.
+  const Grid g0{start, out.rows, out.cols};
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const auto i = static_cast<std::size_t>(r * out.cols + c);
+      const Corner& k = out.corners[i];
+      Eigen::Vector2d dc, dr;
+      g0.steps(r, c, dc, dr);
+      SaddleInit init;
+      init.px = start[i];
+      if (from_previous && k.sigma_px > 0) {
+        init.theta1 = k.theta_row;
+        init.theta2 = k.theta_col;
+        init.sigma = k.sigma_px;
+      } else {
+        init.theta1 = std::atan2(dc.y(), dc.x()) + kHalfPi;  // normal of the edge along the row
+        init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
+        init.sigma = 0.8;
+      }
+      // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
+      const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
+      if (!fit_corner(init, r1, 1e-2, fits[i], flags[i])) {
+        failure_ = CornerFailure::fit_failed;
+        return false;
+      }
+      first[i] = fits[i].px;
+    }
+  }
+  // Pass 2: the window that the fitted grid calls for, centred on the fitted corner, so that the
+  // result does not depend on where the fit started (tracking and full search must agree); it starts
+  // at the pass-1 optimum and converges in a few iterations.
+  const Grid g1{first, out.rows, out.cols};
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const auto i = static_cast<std::size_t>(r * out.cols + c);
+      Eigen::Vector2d dc, dr;
+      g1.steps(r, c, dc, dr);
+      const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
+      const SaddleInit again{fits[i].px, fits[i].theta1, fits[i].theta2, fits[i].sigma};
+      flags[i] = 0;
+      if (!fit_corner(again, radius, 1e-4, fits[i], flags[i])) {
+        failure_ = CornerFailure::fit_failed;
+        return false;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const SaddleFit& fit = fits[i];
+    if (fit.contrast < settings_.min_contrast_dn ||
+        fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < settings_.min_sigma_px ||
+        fit.sigma > settings_.max_sigma_px) {
+      failure_ = CornerFailure::fit_rejected;
+      return false;
+    }
+    if (fit.rms > 0.5 * settings_.max_relative_residual * fit.contrast) flags[i] |= kCornerFitPoor;
+    if (!fit.undistorted || !camera_.in_domain(fit.px)) flags[i] |= kCornerBeyondFold;
+    Corner& k = out.corners[i];
+    k.px = fit.px;
+    k.row = static_cast<int>(i) / out.cols;
+    k.col = static_cast<int>(i) % out.cols;
+    k.flags = flags[i];
+    k.sigma_px = fit.sigma;
+    k.contrast = 2.0 * fit.contrast;
+    k.residual = fit.rms;
+    k.theta_row = fit.theta1;
+    k.theta_col = fit.theta2;
+  }
+  return true;
+}
+
+bool CornerDetector::validate(const CornerResult& out) {
+  // Every corner a saddle of the right polarity: a checkerboard alternates along rows and columns.
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  const int p0 = corner_polarity(v, out, 0, 0);
+  failure_ = CornerFailure::polarity;
+  if (p0 == 0) return false;
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const int expect = ((r + c) % 2 == 0) ? p0 : -p0;
+      if (corner_polarity(v, out, r, c) != expect) return false;
+    }
+  }
+  // The grid must be the image of a plane: a homography in undistorted coordinates.
+  double rms = 0, worst = 0;
+  failure_ = CornerFailure::not_planar;
+  if (!grid_homography_residual(out, camera_, rms, worst)) return false;
+  if (rms > settings_.max_homography_rms_px || worst > settings_.max_homography_worst_px) return false;
+  failure_ = CornerFailure::none;
+  return true;
+}
+
+}  // namespace naneye::recon
