@@ -1,0 +1,117 @@
+#pragma once
+// Checkerboard inner-corner detection on raw NanEye frames (issue #5): a coarse grid (tracked from
+// the previous frame, or a full search), then a sub-pixel fit of every corner with a blurred-saddle
+// model whose edges are straight in undistorted coordinates (corners_refine.hpp), then validation
+// of the whole grid. Positions are raw (distorted) pixels, pixel centres at integers as in OpenCV.
+//
+// Never a false corner: a grid that fails any check gives found == false and no corners.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "naneye/recon/camera.hpp"
+#include "naneye/recon/pair_result.hpp"
+
+namespace naneye::recon {
+
+enum class PixelLayout : std::uint8_t { mono, bayer_grbg };
+
+// A raw frame as the driver delivers it (driver::Frame::pixels): 10-bit values, row-major. recon
+// does not depend on the driver, hence a plain view. Column 249 of a NanEye frame is padding and
+// row 0 / row 249 carry reference pixels: pixels in `ignore_last_cols` columns and the first and last
+// `ignore_edge_rows` rows are never used.
+struct RawImageView {
+  const std::uint16_t* data = nullptr;
+  int width = 250, height = 250, stride = 250;  // stride in elements
+  PixelLayout layout = PixelLayout::mono;
+  int ignore_last_cols = 1;
+  int ignore_edge_rows = 1;
+};
+
+// Per-corner flags (bit set).
+enum CornerFlag : std::uint8_t {
+  kCornerBeyondFold = 1,  // outside the camera model's valid domain: position from a pixel-space fit
+  kCornerFitPoor = 2,     // the saddle fit converged but its residual or contrast is marginal
+  kCornerNearEdge = 4,    // the fit window had to be shrunk at the image border
+};
+
+struct Corner {
+  Eigen::Vector2d px{0, 0};  // raw pixel, centres at integers
+  int row = 0, col = 0;      // id = row * cols + col
+  std::uint8_t flags = 0;
+  double sigma_px = 0;  // fitted blur of the edges
+  double contrast = 0;  // |white - black| at the corner, in DN
+  double residual = 0;  // RMS fit residual, DN
+  // Fitted edge directions (radians, in undistorted local pixel coordinates) - reused when tracking.
+  double theta_row = 0, theta_col = 0;
+};
+
+struct CornerResult {
+  bool found = false;
+  bool tracked = false;  // true when the grid came from the previous result (no full search)
+  int rows = 0, cols = 0;
+  int count = 0;  // rows * cols when found, else 0
+  std::array<Corner, kMaxCorners> corners{};
+  const Corner& at(int row, int col) const { return corners[static_cast<std::size_t>(row * cols + col)]; }
+};
+
+struct CornerSettings {
+  int rows = 6, cols = 8;  // inner corners of the paper's 9 x 7 squares board (7 x 9 held landscape)
+  // Fit window half size bounds (pixels): the window adapts to the local corner spacing.
+  int min_half_window = 3, max_half_window = 7;
+  // Acceptance: fit residual relative to the contrast, minimum contrast (DN, 10-bit), blur bounds.
+  double max_relative_residual = 0.12;
+  double min_contrast_dn = 40.0;
+  double min_sigma_px = 0.2, max_sigma_px = 3.0;
+  // Grid validation: the RMS of a homography fit from board to undistorted coordinates, in pixels
+  // (scaled by fx), and the worst single corner.
+  double max_homography_rms_px = 0.5, max_homography_worst_px = 1.5;
+  // Tracking: accept the tracked grid when every corner moved less than this from the previous one.
+  double max_track_motion_px = 4.0;
+};
+
+class CornerDetector {
+ public:
+  CornerDetector(const CameraModel& camera, const CornerSettings& settings = {});
+
+  // Detects the board in `image`. With `previous` found, first tracks from it (fit windows around the
+  // previous corners) and falls back to a full search when tracking fails validation.
+  // Returns out.found. Allocates nothing once warmed up, except inside the OpenCV full search.
+  bool detect(const RawImageView& image, const CornerResult* previous, CornerResult& out);
+  // Full search only (no tracking).
+  bool detect_full(const RawImageView& image, CornerResult& out) { return detect(image, nullptr, out); }
+
+  const CameraModel& camera() const { return camera_; }
+  const CornerSettings& settings() const { return settings_; }
+  // The luminance image of the last detect() call (float DN, width x height), for diagnostics.
+  const std::vector<float>& luminance() const { return luma_; }
+
+ private:
+  bool track(const CornerResult& previous, CornerResult& out);
+  bool full_search(CornerResult& out);
+  bool refine_all(CornerResult& out, bool from_previous);
+  bool validate(const CornerResult& out) const;
+
+  CameraModel camera_;
+  CornerSettings settings_;
+  int width_ = 0, height_ = 0;
+  int row_begin_ = 0, row_end_ = 0, col_end_ = 0;  // usable pixel area
+  std::vector<float> luma_;
+  std::vector<unsigned char> gray8_;
+  std::vector<Eigen::Vector2f> coarse_;
+};
+
+// The luminance of a raw frame, without moving any edge: mono is copied; GRBG Bayer is filtered
+// with the 3x3 binomial kernel, which weighs R, G, B as 1/4, 1/2, 1/4 at every site of the mosaic
+// and is symmetric about each pixel centre (no half-pixel shift). Unusable pixels are replicated
+// from their neighbours. `out` must hold width * height floats.
+void raw_to_luminance(const RawImageView& image, float* out);
+
+// Orders a detected grid by one image-space convention so that two near-identical views number the
+// same physical corners alike: the column axis (row 0 -> col 0 .. cols-1) points to +x in the image
+// when it is closer to horizontal, else to +y. Only the 180-degree turn is free for rows != cols.
+void canonical_order(CornerResult& r);
+
+}  // namespace naneye::recon

@@ -1,0 +1,130 @@
+#include "naneye/recon/corners_grid.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+namespace naneye::recon {
+
+bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<unsigned char>& gray8,
+                        std::vector<Eigen::Vector2f>& coarse) {
+  // Stretch the usable area's 1st..99th percentile to 0..255 (10-bit DN would be clipped or too
+  // dark for OpenCV's 8-bit detectors; the dark background and hot pixels must not set the scale).
+  std::array<int, 1024> hist{};
+  int n = 0;
+  for (int r = img.row_begin; r < img.row_end; ++r) {
+    for (int c = 0; c < img.col_end; ++c) {
+      ++hist[static_cast<std::size_t>(std::clamp(static_cast<int>(img.at(r, c)), 0, 1023))];
+      ++n;
+    }
+  }
+  int lo = 0, hi = 1023, acc = 0;
+  for (int v = 0; v < 1024; ++v) {
+    acc += hist[static_cast<std::size_t>(v)];
+    if (acc <= n / 100) lo = v;
+    if (acc < n - n / 100) hi = v + 1;
+  }
+  if (hi <= lo) return false;
+  gray8.resize(static_cast<std::size_t>(img.width) * img.height);
+  const float scale = 255.0f / static_cast<float>(hi - lo);
+  for (int i = 0; i < img.width * img.height; ++i) {
+    gray8[static_cast<std::size_t>(i)] =
+        static_cast<unsigned char>(std::clamp((img.data[i] - static_cast<float>(lo)) * scale, 0.0f, 255.0f));
+  }
+  const cv::Mat gray(img.height, img.width, CV_8UC1, gray8.data());
+  std::vector<cv::Point2f> pts;
+  bool ok = cv::findChessboardCorners(gray, cv::Size(cols, rows), pts,
+                                      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+  if (!ok) ok = cv::findChessboardCornersSB(gray, cv::Size(cols, rows), pts, cv::CALIB_CB_NORMALIZE_IMAGE);
+  if (!ok || static_cast<int>(pts.size()) != rows * cols) return false;
+  coarse.resize(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) coarse[i] = {pts[i].x, pts[i].y};
+  return true;
+}
+
+bool grid_homography_residual(const CornerResult& r, const CameraModel& cam, double& rms_px,
+                              double& worst_px) {
+  // DLT (Hartley & Zisserman, Alg. 4.2) with normalization of the image side.
+  std::array<Eigen::Vector2d, kMaxCorners> xs;
+  std::array<Eigen::Vector2d, kMaxCorners> bs;
+  int n = 0;
+  for (int i = 0; i < r.count; ++i) {
+    const Corner& c = r.corners[static_cast<std::size_t>(i)];
+    if (c.flags & kCornerBeyondFold) continue;
+    const Undistorted u = cam.undistort(c.px);
+    if (!u.ok()) continue;
+    xs[static_cast<std::size_t>(n)] = u.normalized * cam.fx();
+    bs[static_cast<std::size_t>(n)] = {c.col, c.row};
+    ++n;
+  }
+  if (n < 8) return false;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (int i = 0; i < n; ++i) mean += xs[static_cast<std::size_t>(i)];
+  mean /= n;
+  double spread = 0;
+  for (int i = 0; i < n; ++i) spread += (xs[static_cast<std::size_t>(i)] - mean).norm();
+  spread = spread / n;
+  if (!(spread > 0)) return false;
+  const double s = std::sqrt(2.0) / spread;
+  Eigen::MatrixXd A(2 * n, 9);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d x = (xs[static_cast<std::size_t>(i)] - mean) * s;
+    const Eigen::Vector3d b(bs[static_cast<std::size_t>(i)].x(), bs[static_cast<std::size_t>(i)].y(), 1.0);
+    A.row(2 * i) << b.transpose(), 0, 0, 0, -x.x() * b.transpose();
+    A.row(2 * i + 1) << 0, 0, 0, b.transpose(), -x.y() * b.transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::Matrix<double, 9, 1> h = svd.matrixV().col(8);
+  Eigen::Matrix3d H;
+  H << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8];
+  double sum = 0;
+  worst_px = 0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d b(bs[static_cast<std::size_t>(i)].x(), bs[static_cast<std::size_t>(i)].y(), 1.0);
+    const Eigen::Vector3d p = H * b;
+    if (std::abs(p.z()) < 1e-12) return false;
+    const Eigen::Vector2d x = p.head<2>() / p.z() / s + mean;
+    const double e = (x - xs[static_cast<std::size_t>(i)]).norm();
+    sum += e * e;
+    worst_px = std::max(worst_px, e);
+  }
+  // The algebraic fit is not the geometric optimum; with 48 corners and sub-pixel noise the
+  // difference is far below the thresholds this is compared with.
+  rms_px = std::sqrt(sum / n);
+  return true;
+}
+
+namespace {
+float bilinear(const LumaView& img, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  if (x0 < 0 || y0 < img.row_begin || x0 + 1 >= img.col_end || y0 + 1 >= img.row_end) return -1.0f;
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const float a = img.at(y0, x0), b = img.at(y0, x0 + 1), c = img.at(y0 + 1, x0), d = img.at(y0 + 1, x0 + 1);
+  return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy;
+}
+}  // namespace
+
+int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col) {
+  // Grid directions from the neighbours (one-sided at the grid's border).
+  const Eigen::Vector2d p = r.at(row, col).px;
+  const int c0 = std::max(col - 1, 0), c1 = std::min(col + 1, r.cols - 1);
+  const int r0 = std::max(row - 1, 0), r1 = std::min(row + 1, r.rows - 1);
+  const Eigen::Vector2d dc = (r.at(row, c1).px - r.at(row, c0).px) / (c1 - c0);
+  const Eigen::Vector2d dr = (r.at(r1, col).px - r.at(r0, col).px) / (r1 - r0);
+  // Quadrant centres at 0.35 of the spacing along each diagonal.
+  const Eigen::Vector2d a = p + 0.35 * (dc + dr), b = p - 0.35 * (dc + dr);
+  const Eigen::Vector2d c = p + 0.35 * (dc - dr), d = p - 0.35 * (dc - dr);
+  const float va = bilinear(img, a.x(), a.y()), vb = bilinear(img, b.x(), b.y());
+  const float vc = bilinear(img, c.x(), c.y()), vd = bilinear(img, d.x(), d.y());
+  if (va < 0 || vb < 0 || vc < 0 || vd < 0) return 0;
+  const float diag1 = std::min(va, vb), diag2 = std::min(vc, vd);
+  const float diag1_max = std::max(va, vb), diag2_max = std::max(vc, vd);
+  // Both quadrants of one diagonal must be brighter than both of the other.
+  if (diag1 > diag2_max) return 1;
+  if (diag2 > diag1_max) return -1;
+  return 0;
+}
+
+}  // namespace naneye::recon

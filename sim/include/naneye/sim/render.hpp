@@ -1,0 +1,103 @@
+#pragma once
+// The in-memory renderer: a checkerboard at a pose seen by both cameras of a rig through the full
+// model (recon::CameraModel), with the sensor of sensor.hpp, and the exact truth of every corner.
+//
+// Usage (the cheap path for many frames: the Renderer precomputes each camera's rays once, ~0.2 s):
+//   naneye::sim::Renderer r(rig, scene, naneye::sim::SensorSettings{});
+//   naneye::sim::Rng rng(42);
+//   naneye::sim::RenderedPair p = r.render(pose, rng);   // p.left, p.right: CV_16UC1 250 x 250
+// For an exact, noise-free and blur-free image use SensorSettings::ideal() (and scene.lighting =
+// false for uniform shading). render_pair() is the one-call form (builds a Renderer each call).
+//
+// Conventions: pixel centres at integer coordinates (OpenCV); pixel (r, c) integrates the scene over
+// [c - 0.5, c + 0.5] x [r - 0.5, r + 0.5]. Points of the image beyond the distortion model's fold get
+// no light (undistort returns outside_model there): they read black level plus noise.
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <random>
+#include <vector>
+
+#include "naneye/recon/rig.hpp"
+#include "naneye/sim/scene.hpp"
+#include "naneye/sim/sensor.hpp"
+
+namespace naneye::sim {
+
+// One generator for everything random (noise, poses, timing); the same seed gives the same bytes.
+using Rng = std::mt19937_64;
+
+enum class Eye : int { left = 0, right = 1 };
+
+// Ground truth of one rendered pair. Corners are row-major over the inner grid (board rows first).
+struct Truth {
+  Pose pose;                                // board -> left camera
+  std::vector<Eigen::Vector3d> corners_mm;  // left camera frame
+  // Raw pixel coordinates from CameraModel::project; valid only where *_imaged is true (the corner
+  // lies in front of the camera and inside the model's valid domain: otherwise the projection is a
+  // folded-back number that no ray reaches).
+  std::vector<Eigen::Vector2d> left_px, right_px;
+  std::vector<bool> left_imaged, right_imaged;
+  // Imaged and inside the active pixels (0 <= u <= 248, 0 <= v <= 249, minus the padding).
+  std::vector<bool> left_in_view, right_in_view;
+  bool board_present = true;
+  bool board_in_view = true;  // board present and every inner corner in view in both images
+};
+
+struct RenderedPair {
+  cv::Mat left, right;  // CV_16UC1, 250 x 250, 10-bit values, reference pixels and padding included
+  Truth truth;
+};
+
+// Corners of `board` at `pose`, projected by both cameras of `rig`.
+Truth compute_truth(const recon::StereoRig& rig, const BoardGeometry& board, const Pose& pose,
+                    bool board_present = true);
+
+class Renderer {
+ public:
+  Renderer(const recon::StereoRig& rig, const SceneSettings& scene, const SensorSettings& sensor);
+
+  const recon::StereoRig& rig() const { return rig_; }
+  const SceneSettings& scene() const { return scene_; }
+  const SensorSettings& sensor() const { return sensor_; }
+
+  // Working images reused from frame to frame by render_into (one per rendering thread).
+  struct Scratch {
+    cv::Mat light, blurred;
+  };
+
+  RenderedPair render(const Pose& board, Rng& rng) const;
+  // The form for the live source: writes into 250 x 250 row-major buffers, reusing `scratch`, so a
+  // steady stream of frames allocates nothing of its own.
+  void render_into(const Pose& board, Rng& rng, std::uint16_t* left, std::uint16_t* right,
+                   Scratch& scratch) const;
+  // The light reaching each pixel before the sensor (CV_32FC1, 1.0 = a white square facing the
+  // camera on axis at the light's reference distance): scene radiance integrated over the pixel,
+  // with the lighting and, if the sensor has it, the vignetting. No blur, noise or quantisation.
+  cv::Mat irradiance(Eye eye, const Pose& board) const;
+
+ private:
+  struct RayTable {
+    int n = 0;
+    std::vector<float> sub;     // per pixel n*n (x, y) normalized rays; NaN beyond the fold
+    std::vector<float> centre;  // per pixel the centre's ray; NaN beyond the fold
+    std::vector<float> cos4;    // per pixel cos^4 of the centre ray's angle (0 beyond the fold)
+  };
+  static RayTable build_rays(const recon::CameraModel& cam, int n);
+  void irradiance_into(Eye eye, const Pose& board, float* out) const;
+  void sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* out) const;
+  void init_defects();
+
+  recon::StereoRig rig_;
+  SceneSettings scene_;
+  SensorSettings sensor_;
+  RayTable rays_[2];
+  std::vector<int> defects_[2];  // pixel indices; value in defect_values_
+  std::vector<std::uint16_t> defect_values_[2];
+};
+
+// One call: builds a Renderer (precomputing rays), renders one pair.
+RenderedPair render_pair(const SceneSettings& scene, const SensorSettings& sensor,
+                         const recon::StereoRig& rig, const Pose& board, Rng& rng);
+
+}  // namespace naneye::sim

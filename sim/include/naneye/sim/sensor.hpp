@@ -1,0 +1,53 @@
+#pragma once
+// The NanEye 2D sensor and lens as the simulator models them (docs/simulator.md gives the sources
+// of each figure: the spec/datasheet where it states one, otherwise an assumption, named as such).
+#include <array>
+#include <cstdint>
+
+namespace naneye::sim {
+
+struct SensorSettings {
+  bool bayer = false;  // GRBG colour variant (row 0: G R G R ..., row 1: B G B G ...) or monochrome
+  // Relative sensitivities of the R, G, B sites to the white light (colour variant only).
+  std::array<double, 3> channel_gain{0.78, 1.0, 0.62};
+
+  // Exposure: a white square facing the camera on axis at the light's reference distance gives
+  // black_level_dn + white_dn (before vignetting).
+  double black_level_dn = 48.0;
+  double white_dn = 760.0;
+
+  // Noise: shot noise from the electron count (gain_e_per_dn electrons per DN, Poisson approximated
+  // by a Gaussian of the same variance) plus read noise.
+  bool noise = true;
+  double gain_e_per_dn = 12.0;
+  double read_noise_dn = 1.8;
+
+  // Optical blur: the F-number's diffraction (Airy core ~ Gaussian, sigma = 0.42 lambda N) in pixels
+  // of pixel_pitch_um, combined in quadrature with a defocus sigma.
+  bool blur = true;
+  double wavelength_um = 0.55;
+  double f_number = 2.7;
+  double pixel_pitch_um = 3.0;
+  double defocus_sigma_px = 0.35;
+  double blur_sigma_px() const;
+
+  // Natural cos^4 fall-off of the lens (the light's fall-off is part of SceneSettings::lighting).
+  bool vignetting = true;
+
+  // Defect pixels (< 10 per sensor per the datasheet), at positions fixed by defect_seed per sensor.
+  int defect_pixels = 5;
+  std::uint64_t defect_seed = 0x4e616e457965ULL;
+
+  // Reference pixels of the spec: row 0 columns 0..3 and row 249 columns 246, 247. The levels follow
+  // the vendor parser's check (row 0: px 0 and 2 <= 600, px 1 and 3 >= 800; row 249: px 246 <= 600,
+  // px 247 >= 800); which of each pair is dark is unconfirmed on hardware, hence configurable.
+  bool reference_pixels = true;
+  std::array<std::uint16_t, 4> reference_row0{40, 1000, 40, 1000};
+  std::array<std::uint16_t, 2> reference_row249{40, 1000};  // columns 246, 247
+  std::uint16_t padding_value = 0;                          // column 249 and row 249 columns 248-249
+
+  // An ideal sensor: no noise, blur, vignetting or defects; reference pixels and padding kept.
+  static SensorSettings ideal();
+};
+
+}  // namespace naneye::sim

@@ -1,0 +1,94 @@
+// Light on the pixels -> 10-bit values: optical blur, Bayer sites, exposure, shot and read noise,
+// quantisation, defects, reference pixels and padding (docs/simulator.md).
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "naneye/driver/frame.hpp"
+#include "naneye/sim/render.hpp"
+
+namespace naneye::sim {
+namespace {
+constexpr int kSize = driver::kSensorSize;
+
+bool reserved(int r, int c) {
+  return driver::Frame::is_padding(r, c) || (r == 0 && c < 4) || (r == kSize - 1 && c >= kSize - 4);
+}
+}  // namespace
+
+double SensorSettings::blur_sigma_px() const {
+  // Airy core ~ Gaussian of sigma 0.42 lambda N (Zhang, Zerubia, Olivo-Marin, Appl. Opt. 2007).
+  const double diffraction = 0.42 * wavelength_um * f_number / pixel_pitch_um;
+  return std::hypot(diffraction, defocus_sigma_px);
+}
+
+SensorSettings SensorSettings::ideal() {
+  SensorSettings s;
+  s.noise = false;
+  s.blur = false;
+  s.vignetting = false;
+  s.defect_pixels = 0;
+  return s;
+}
+
+void Renderer::init_defects() {
+  // Defects belong to the die, not to the frame: fixed positions per sensor from defect_seed.
+  for (int eye = 0; eye < 2; ++eye) {
+    Rng g(sensor_.defect_seed + static_cast<std::uint64_t>(eye));
+    std::uniform_int_distribution<int> pos(0, kSize - 1), kind(0, 2);
+    defects_[eye].clear();
+    defect_values_[eye].clear();
+    while (static_cast<int>(defects_[eye].size()) < sensor_.defect_pixels) {
+      const int r = pos(g), c = pos(g);
+      const int p = r * kSize + c;
+      if (reserved(r, c) || std::find(defects_[eye].begin(), defects_[eye].end(), p) != defects_[eye].end())
+        continue;
+      defects_[eye].push_back(p);
+      // Hot (saturated), dead (reads zero) or stuck at mid-scale.
+      static constexpr std::uint16_t kValues[] = {driver::kPixelMax, 0, 512};
+      defect_values_[eye].push_back(kValues[kind(g)]);
+    }
+  }
+}
+
+void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* out) const {
+  const cv::Mat* light = &scratch.light;
+  if (sensor_.blur) {
+    const double sigma = sensor_.blur_sigma_px();
+    const int k = 2 * static_cast<int>(std::ceil(3.0 * sigma)) + 1;
+    cv::GaussianBlur(scratch.light, scratch.blurred, cv::Size(k, k), sigma, sigma, cv::BORDER_REPLICATE);
+    light = &scratch.blurred;
+  }
+  std::normal_distribution<float> normal(0.0f, 1.0f);
+  const auto& g = sensor_.channel_gain;
+  for (int r = 0; r < kSize; ++r) {
+    const float* in = light->ptr<float>(r);
+    std::uint16_t* o = out + static_cast<std::size_t>(r) * kSize;
+    for (int c = 0; c < kSize; ++c) {
+      double gain = 1.0;
+      // GRBG: row 0 G R G R ..., row 1 B G B G ...
+      if (sensor_.bayer) gain = (r & 1) == 0 ? ((c & 1) == 0 ? g[1] : g[0]) : ((c & 1) == 0 ? g[2] : g[1]);
+      const double signal = std::max(0.0, static_cast<double>(in[c]) * sensor_.white_dn * gain);
+      double dn = sensor_.black_level_dn + signal;
+      if (sensor_.noise) {
+        // Shot noise: variance signal * gain (e-) -> signal / gain_e_per_dn in DN^2; plus read noise.
+        const double sd =
+            std::sqrt(signal / sensor_.gain_e_per_dn + sensor_.read_noise_dn * sensor_.read_noise_dn);
+        dn += sd * normal(rng);
+      }
+      o[c] =
+          static_cast<std::uint16_t>(std::clamp(std::lround(dn), 0L, static_cast<long>(driver::kPixelMax)));
+    }
+  }
+  const int e = static_cast<int>(eye);
+  for (std::size_t i = 0; i < defects_[e].size(); ++i) out[defects_[e][i]] = defect_values_[e][i];
+  if (sensor_.reference_pixels) {
+    for (int c = 0; c < 4; ++c) out[c] = sensor_.reference_row0[c];
+    out[(kSize - 1) * kSize + kSize - 4] = sensor_.reference_row249[0];
+    out[(kSize - 1) * kSize + kSize - 3] = sensor_.reference_row249[1];
+  }
+  for (int r = 0; r < kSize; ++r) out[r * kSize + kSize - 1] = sensor_.padding_value;
+  out[(kSize - 1) * kSize + kSize - 2] = sensor_.padding_value;
+}
+
+}  // namespace naneye::sim
