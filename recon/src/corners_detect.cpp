@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "naneye/recon/corners.hpp"
 #include "naneye/recon/corners_grid.hpp"
@@ -27,6 +28,28 @@ void renumber(CornerResult& r) {
 }
 }  // namespace
 
+const char* to_string(CornerFailure f) {
+  switch (f) {
+    case CornerFailure::none:
+      return "none";
+    case CornerFailure::bad_input:
+      return "bad_input";
+    case CornerFailure::no_grid:
+      return "no_grid";
+    case CornerFailure::fit_failed:
+      return "fit_failed";
+    case CornerFailure::fit_rejected:
+      return "fit_rejected";
+    case CornerFailure::polarity:
+      return "polarity";
+    case CornerFailure::not_planar:
+      return "not_planar";
+    case CornerFailure::track_moved:
+      return "track_moved";
+  }
+  return "unknown";
+}
+
 void canonical_order(CornerResult& r) {
   if (r.count != r.rows * r.cols || r.rows < 2 || r.cols < 2) return;
   Eigen::Vector2d col_dir, row_dir;
@@ -51,6 +74,7 @@ void canonical_order(CornerResult& r) {
 CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& settings)
     : camera_(camera), settings_(settings), width_(camera.width()), height_(camera.height()) {
   luma_.resize(static_cast<std::size_t>(width_) * height_);
+  scratch_.resize(luma_.size());
   gray8_.resize(luma_.size());
   coarse_.reserve(kMaxCorners);
 }
@@ -61,11 +85,13 @@ bool CornerDetector::detect(const RawImageView& image, const CornerResult* previ
   out.count = 0;
   out.rows = settings_.rows;
   out.cols = settings_.cols;
+  failure_ = CornerFailure::none;
   if (image.width != width_ || image.height != height_ || !image.data ||
       settings_.rows * settings_.cols > kMaxCorners) {
+    failure_ = CornerFailure::bad_input;
     return false;
   }
-  raw_to_luminance(image, luma_.data());
+  raw_to_luminance(image, luma_.data(), scratch_.data());
   row_begin_ = image.ignore_edge_rows;
   row_end_ = height_ - image.ignore_edge_rows;
   col_end_ = width_ - image.ignore_last_cols;
@@ -85,7 +111,10 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out) {
     const auto k = static_cast<std::size_t>(i);
     // A corner that moved by a sizeable part of the spacing may have locked onto its neighbour,
     // which would shift every id: refuse and search afresh.
-    if ((out.corners[k].px - previous.corners[k].px).norm() > settings_.max_track_motion_px) return false;
+    if ((out.corners[k].px - previous.corners[k].px).norm() > settings_.max_track_motion_px) {
+      failure_ = CornerFailure::track_moved;
+      return false;
+    }
   }
   if (!validate(out)) return false;
   out.found = true;
@@ -95,7 +124,10 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out) {
 
 bool CornerDetector::full_search(CornerResult& out) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  if (!coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_)) return false;
+  if (!coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_)) {
+    failure_ = CornerFailure::no_grid;
+    return false;
+  }
   out.count = settings_.rows * settings_.cols;
   for (int i = 0; i < out.count; ++i) {
     Corner& c = out.corners[static_cast<std::size_t>(i)];
@@ -111,27 +143,60 @@ bool CornerDetector::full_search(CornerResult& out) {
   return true;
 }
 
-bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
+namespace {
+struct Grid {
+  const std::array<Eigen::Vector2d, kMaxCorners>& p;
+  int rows, cols;
+  const Eigen::Vector2d& at(int r, int c) const { return p[static_cast<std::size_t>(r * cols + c)]; }
+  // Grid steps along the row (to the next column) and along the column, one-sided at the border.
+  void steps(int r, int c, Eigen::Vector2d& dc, Eigen::Vector2d& dr) const {
+    const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, cols - 1);
+    const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, rows - 1);
+    dc = (at(r, c1) - at(r, c0)) / (c1 - c0);
+    dr = (at(r1, c) - at(r0, c)) / (r1 - r0);
+  }
+};
+}  // namespace
+
+double CornerDetector::fit_radius(double spacing) const {
+  // The window must not reach the neighbouring corners' edges (blur included).
+  return std::clamp(settings_.window_fraction * spacing, settings_.min_radius, settings_.max_radius);
+}
+
+bool CornerDetector::fit_corner(const SaddleInit& init, double radius, SaddleFit& fit, std::uint8_t& flags) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  // Grid directions and spacing come from the coarse (or previous) positions, before any is moved.
-  std::array<Eigen::Vector2d, kMaxCorners> start;
-  for (int i = 0; i < out.count; ++i)
-    start[static_cast<std::size_t>(i)] = out.corners[static_cast<std::size_t>(i)].px;
-  auto pos = [&](int r, int c) { return start[static_cast<std::size_t>(r * out.cols + c)]; };
+  bool ok = fit_saddle(v, camera_, init, radius, 50, fit);
+  while (!ok && radius > settings_.min_radius) {
+    const int half = static_cast<int>(std::ceil(radius)) + 1;
+    const int cx = static_cast<int>(std::lround(init.px.x())),
+              cy = static_cast<int>(std::lround(init.px.y()));
+    const bool at_edge =
+        cx - half < 0 || cx + half >= col_end_ || cy - half < row_begin_ || cy + half >= row_end_;
+    if (!at_edge) break;
+    radius = std::max(radius - 1.0, settings_.min_radius);
+    flags |= kCornerNearEdge;
+    ok = fit_saddle(v, camera_, init, radius, 50, fit);
+  }
+  return ok;
+}
+
+bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   constexpr double kHalfPi = 1.57079632679489661923;
+  const std::size_t n = static_cast<std::size_t>(out.count);
+  std::array<Eigen::Vector2d, kMaxCorners> start, first;
+  std::array<SaddleFit, kMaxCorners> fits;
+  std::array<std::uint8_t, kMaxCorners> flags{};
+  for (std::size_t i = 0; i < n; ++i) start[i] = out.corners[i].px;
+  // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing.
+  const Grid g0{start, out.rows, out.cols};
   for (int r = 0; r < out.rows; ++r) {
     for (int c = 0; c < out.cols; ++c) {
-      Corner& k = out.corners[static_cast<std::size_t>(r * out.cols + c)];
-      const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, out.cols - 1);
-      const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, out.rows - 1);
-      const Eigen::Vector2d dc = (pos(r, c1) - pos(r, c0)) / (c1 - c0);
-      const Eigen::Vector2d dr = (pos(r1, c) - pos(r0, c)) / (r1 - r0);
-      const double spacing = std::min(dc.norm(), dr.norm());
-      // The window must not reach the neighbouring corners' edges (blur included).
-      int half =
-          std::clamp(static_cast<int>(0.45 * spacing), settings_.min_half_window, settings_.max_half_window);
+      const auto i = static_cast<std::size_t>(r * out.cols + c);
+      const Corner& k = out.corners[i];
+      Eigen::Vector2d dc, dr;
+      g0.steps(r, c, dc, dr);
       SaddleInit init;
-      init.px = pos(r, c);
+      init.px = start[i];
       if (from_previous && k.sigma_px > 0) {
         init.theta1 = k.theta_row;
         init.theta2 = k.theta_col;
@@ -141,45 +206,62 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
         init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
         init.sigma = 0.8;
       }
-      SaddleFit fit;
-      std::uint8_t flags = 0;
-      bool ok = fit_saddle(v, camera_, init, half, 20, fit);
-      while (!ok && half > settings_.min_half_window) {
-        const int cx = static_cast<int>(std::lround(init.px.x())),
-                  cy = static_cast<int>(std::lround(init.px.y()));
-        const bool at_edge =
-            cx - half < 0 || cx + half >= col_end_ || cy - half < row_begin_ || cy + half >= row_end_;
-        if (!at_edge) break;
-        --half;
-        flags |= kCornerNearEdge;
-        ok = fit_saddle(v, camera_, init, half, 20, fit);
-      }
-      if (!ok) return false;
-      if (fit.contrast < settings_.min_contrast_dn ||
-          fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < settings_.min_sigma_px ||
-          fit.sigma > settings_.max_sigma_px) {
+      // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
+      const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
+      if (!fit_corner(init, r1, fits[i], flags[i])) {
+        failure_ = CornerFailure::fit_failed;
         return false;
       }
-      if (fit.rms > 0.5 * settings_.max_relative_residual * fit.contrast) flags |= kCornerFitPoor;
-      if (!fit.undistorted || !camera_.in_domain(fit.px)) flags |= kCornerBeyondFold;
-      k.px = fit.px;
-      k.row = r;
-      k.col = c;
-      k.flags = flags;
-      k.sigma_px = fit.sigma;
-      k.contrast = 2.0 * fit.contrast;
-      k.residual = fit.rms;
-      k.theta_row = fit.theta1;
-      k.theta_col = fit.theta2;
+      first[i] = fits[i].px;
     }
+  }
+  // Pass 2: the window that the fitted grid calls for, centred on the fitted corner, so that the
+  // result does not depend on where the fit started (tracking and full search must agree); it starts
+  // at the pass-1 optimum and converges in a few iterations.
+  const Grid g1{first, out.rows, out.cols};
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const auto i = static_cast<std::size_t>(r * out.cols + c);
+      Eigen::Vector2d dc, dr;
+      g1.steps(r, c, dc, dr);
+      const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
+      const SaddleInit again{fits[i].px, fits[i].theta1, fits[i].theta2, fits[i].sigma};
+      flags[i] = 0;
+      if (!fit_corner(again, radius, fits[i], flags[i])) {
+        failure_ = CornerFailure::fit_failed;
+        return false;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const SaddleFit& fit = fits[i];
+    if (fit.contrast < settings_.min_contrast_dn ||
+        fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < settings_.min_sigma_px ||
+        fit.sigma > settings_.max_sigma_px) {
+      failure_ = CornerFailure::fit_rejected;
+      return false;
+    }
+    if (fit.rms > 0.5 * settings_.max_relative_residual * fit.contrast) flags[i] |= kCornerFitPoor;
+    if (!fit.undistorted || !camera_.in_domain(fit.px)) flags[i] |= kCornerBeyondFold;
+    Corner& k = out.corners[i];
+    k.px = fit.px;
+    k.row = static_cast<int>(i) / out.cols;
+    k.col = static_cast<int>(i) % out.cols;
+    k.flags = flags[i];
+    k.sigma_px = fit.sigma;
+    k.contrast = 2.0 * fit.contrast;
+    k.residual = fit.rms;
+    k.theta_row = fit.theta1;
+    k.theta_col = fit.theta2;
   }
   return true;
 }
 
-bool CornerDetector::validate(const CornerResult& out) const {
+bool CornerDetector::validate(const CornerResult& out) {
   // Every corner a saddle of the right polarity: a checkerboard alternates along rows and columns.
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
   const int p0 = corner_polarity(v, out, 0, 0);
+  failure_ = CornerFailure::polarity;
   if (p0 == 0) return false;
   for (int r = 0; r < out.rows; ++r) {
     for (int c = 0; c < out.cols; ++c) {
@@ -189,8 +271,11 @@ bool CornerDetector::validate(const CornerResult& out) const {
   }
   // The grid must be the image of a plane: a homography in undistorted coordinates.
   double rms = 0, worst = 0;
+  failure_ = CornerFailure::not_planar;
   if (!grid_homography_residual(out, camera_, rms, worst)) return false;
-  return rms <= settings_.max_homography_rms_px && worst <= settings_.max_homography_worst_px;
+  if (rms > settings_.max_homography_rms_px || worst > settings_.max_homography_worst_px) return false;
+  failure_ = CornerFailure::none;
+  return true;
 }
 
 }  // namespace naneye::recon

@@ -1,10 +1,12 @@
 #include <algorithm>
+#include <array>
+#include <cmath>
 
 #include "naneye/recon/corners.hpp"
 
 namespace naneye::recon {
 
-void raw_to_luminance(const RawImageView& im, float* out) {
+void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float defect_threshold_dn) {
   const int w = im.width, h = im.height;
   const bool bayer = im.layout == PixelLayout::bayer_grbg;
   // Unusable pixels (padding, reference pixels) are replaced by the nearest usable pixel of the same
@@ -22,34 +24,54 @@ void raw_to_luminance(const RawImageView& im, float* out) {
     while (r < row_first) r += step;
     return r;
   };
-  auto raw = [&](int r, int c) {
-    return static_cast<float>(im.data[static_cast<std::size_t>(src_row(r)) * im.stride + src_col(c)]);
-  };
-  if (!bayer) {
-    for (int r = 0; r < h; ++r) {
-      for (int c = 0; c < w; ++c) out[r * w + c] = raw(r, c);
-    }
-    return;
+  float* f = bayer ? scratch : out;
+  for (int r = 0; r < h; ++r) {
+    const std::uint16_t* src = im.data + static_cast<std::size_t>(src_row(r)) * im.stride;
+    for (int c = 0; c < w; ++c) f[r * w + c] = static_cast<float>(src[src_col(c)]);
   }
+  // Defect pixels (hot, dead, stuck; the datasheet allows < 10 per sensor) are replaced by the median
+  // of their 8 same-site neighbours. A defect lies beyond all of them by more than the threshold: a
+  // blurred board has no such isolated extreme (an edge or corner pixel lies between its neighbours),
+  // and the default threshold is ~7 sigma of the shot noise on a white square.
+  for (int r = step; r < h - step; ++r) {
+    for (int c = step; c < w - step; ++c) {
+      const float v = f[r * w + c];
+      // A defect lies beyond every neighbour, so one neighbour within the threshold clears it.
+      if (std::abs(v - f[r * w + c - step]) <= defect_threshold_dn) continue;
+      std::array<float, 8> nb;
+      std::size_t k = 0;
+      for (int dr = -step; dr <= step; dr += step) {
+        for (int dc = -step; dc <= step; dc += step) {
+          if (dr != 0 || dc != 0) nb[k++] = f[(r + dr) * w + c + dc];
+        }
+      }
+      const auto [mn, mx] = std::minmax_element(nb.begin(), nb.end());
+      if (v > *mx + defect_threshold_dn || v < *mn - defect_threshold_dn) {
+        std::nth_element(nb.begin(), nb.begin() + 4, nb.end());
+        f[r * w + c] = nb[4];
+      }
+    }
+  }
+  if (!bayer) return;
   // 3x3 binomial [1 2 1; 2 4 2; 1 2 1] / 16 on the mosaic: at every site it sums R, G, B with
-  // weights 1/4, 1/2, 1/4 and it is symmetric about the pixel centre, so edges do not move.
+  // weights 1/4, 1/2, 1/4 and it is symmetric about the pixel centre, so edges do not move. At the
+  // image border the mosaic is mirrored about the pixel (r - 1 -> r + 1 is the same Bayer site).
+  auto at = [&](int r, int c) {
+    if (r < 0) r = 1;
+    if (r >= h) r = h - 2;
+    if (c < 0) c = 1;
+    if (c >= w) c = w - 2;
+    return f[r * w + c];
+  };
   for (int r = 0; r < h; ++r) {
     for (int c = 0; c < w; ++c) {
-      const bool inner = r > row_first && r < row_last && c > 0 && c < col_last;
       float s;
-      if (inner) {
-        const std::uint16_t* p = im.data + static_cast<std::size_t>(r) * im.stride + c;
-        const std::uint16_t* u = p - im.stride;
-        const std::uint16_t* d = p + im.stride;
-        s = static_cast<float>(u[-1] + 2 * u[0] + u[1] + 2 * p[-1] + 4 * p[0] + 2 * p[1] + d[-1] + 2 * d[0] +
-                               d[1]);
+      if (r > 0 && r < h - 1 && c > 0 && c < w - 1) {
+        const float* p = f + r * w + c;
+        const float* u = p - w;
+        const float* d = p + w;
+        s = u[-1] + 2 * u[0] + u[1] + 2 * p[-1] + 4 * p[0] + 2 * p[1] + d[-1] + 2 * d[0] + d[1];
       } else {
-        // Borders: mirror about the pixel (r +- 1 -> r -+ 1 is the same Bayer site).
-        auto at = [&](int rr, int cc) {
-          if (rr < row_first || rr > row_last) rr = 2 * r - rr;
-          if (cc < 0 || cc > col_last) cc = 2 * c - cc;
-          return raw(rr, cc);
-        };
         s = at(r - 1, c - 1) + 2 * at(r - 1, c) + at(r - 1, c + 1) + 2 * at(r, c - 1) + 4 * at(r, c) +
             2 * at(r, c + 1) + at(r + 1, c - 1) + 2 * at(r + 1, c) + at(r + 1, c + 1);
       }

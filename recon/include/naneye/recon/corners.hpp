@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "naneye/recon/camera.hpp"
+#include "naneye/recon/corners_refine.hpp"
 #include "naneye/recon/pair_result.hpp"
 
 namespace naneye::recon {
@@ -57,14 +58,30 @@ struct CornerResult {
   const Corner& at(int row, int col) const { return corners[static_cast<std::size_t>(row * cols + col)]; }
 };
 
+// Why the last detection found nothing (diagnostics; `naneye recon` may log it).
+enum class CornerFailure : std::uint8_t {
+  none,
+  bad_input,     // image size differs from the camera's, or the pattern exceeds kMaxCorners
+  no_grid,       // the full search found no rows x cols grid
+  fit_failed,    // a corner's saddle fit diverged or its window left the image
+  fit_rejected,  // a corner's contrast, residual or blur is out of bounds
+  polarity,      // the corners do not alternate like a checkerboard
+  not_planar,    // the grid is not the image of a plane (homography residual too large)
+  track_moved    // tracking only: a corner moved too far (full search follows)
+};
+const char* to_string(CornerFailure f);
+
 struct CornerSettings {
   int rows = 6, cols = 8;  // inner corners of the paper's 9 x 7 squares board (7 x 9 held landscape)
-  // Fit window half size bounds (pixels): the window adapts to the local corner spacing.
-  int min_half_window = 3, max_half_window = 7;
+  // Fit window radius (pixels, Chebyshev): a fraction of the local corner spacing, within bounds.
+  double window_fraction = 0.55;
+  double min_radius = 2.5, max_radius = 7.0;
+  // The first of the two fits per corner (from the coarse or previous grid) uses at most this radius.
+  double first_pass_radius = 4.0;
   // Acceptance: fit residual relative to the contrast, minimum contrast (DN, 10-bit), blur bounds.
   double max_relative_residual = 0.12;
   double min_contrast_dn = 40.0;
-  double min_sigma_px = 0.2, max_sigma_px = 3.0;
+  double min_sigma_px = 0.05, max_sigma_px = 3.0;
   // Grid validation: the RMS of a homography fit from board to undistorted coordinates, in pixels
   // (scaled by fx), and the worst single corner.
   double max_homography_rms_px = 0.5, max_homography_worst_px = 1.5;
@@ -85,6 +102,7 @@ class CornerDetector {
 
   const CameraModel& camera() const { return camera_; }
   const CornerSettings& settings() const { return settings_; }
+  CornerFailure last_failure() const { return failure_; }
   // The luminance image of the last detect() call (float DN, width x height), for diagnostics.
   const std::vector<float>& luminance() const { return luma_; }
 
@@ -92,22 +110,29 @@ class CornerDetector {
   bool track(const CornerResult& previous, CornerResult& out);
   bool full_search(CornerResult& out);
   bool refine_all(CornerResult& out, bool from_previous);
-  bool validate(const CornerResult& out) const;
+  double fit_radius(double spacing) const;
+  bool fit_corner(const SaddleInit& init, double radius, SaddleFit& fit, std::uint8_t& flags);
+  bool validate(const CornerResult& out);
 
   CameraModel camera_;
   CornerSettings settings_;
   int width_ = 0, height_ = 0;
+  CornerFailure failure_ = CornerFailure::none;
   int row_begin_ = 0, row_end_ = 0, col_end_ = 0;  // usable pixel area
-  std::vector<float> luma_;
+  std::vector<float> luma_, scratch_;
   std::vector<unsigned char> gray8_;
   std::vector<Eigen::Vector2f> coarse_;
 };
 
 // The luminance of a raw frame, without moving any edge: mono is copied; GRBG Bayer is filtered
 // with the 3x3 binomial kernel, which weighs R, G, B as 1/4, 1/2, 1/4 at every site of the mosaic
-// and is symmetric about each pixel centre (no half-pixel shift). Unusable pixels are replicated
-// from their neighbours. `out` must hold width * height floats.
-void raw_to_luminance(const RawImageView& image, float* out);
+// and is symmetric about each pixel centre (no half-pixel shift). (For comparison, OpenCV calls a
+// GRBG sensor COLOR_BayerGB2GRAY = COLOR_BayerGRBG2GRAY.) Unusable pixels are replicated from their
+// neighbours of the same Bayer site; isolated defect pixels (beyond all 8 same-site neighbours by
+// more than defect_threshold_dn) are replaced by the neighbours' median. `out` and `scratch` must
+// hold width * height floats each.
+void raw_to_luminance(const RawImageView& image, float* out, float* scratch,
+                      float defect_threshold_dn = 60.0f);
 
 // Orders a detected grid by one image-space convention so that two near-identical views number the
 // same physical corners alike: the column axis (row 0 -> col 0 .. cols-1) points to +x in the image

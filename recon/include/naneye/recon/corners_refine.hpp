@@ -42,10 +42,10 @@ struct LumaView {
   float at(int r, int c) const { return data[r * width + c]; }
 };
 
-// Fits one corner with a window of (2 half + 1)^2 pixels centred on round(init.px). Returns false
-// when the window does not fit in the usable area or the fit diverges (left the window, degenerate
-// edges). `max_iterations` bounds the LM iterations.
-bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& init, int half,
+// Fits one corner with the pixels within `radius` (Chebyshev, from init.px; a 1 px taper beyond).
+// Returns false when the window does not fit in the usable area or the fit diverges (left the
+// window, degenerate edges). `max_iterations` bounds the LM iterations.
+bool fit_saddle(const LumaView& img, const CameraModel& cam, const SaddleInit& init, double radius,
                 int max_iterations, SaddleFit& out);
 
 }  // namespace naneye::recon
