@@ -5,5 +5,6 @@
 namespace naneye::tools {
 
 void add_calib_commands(CLI::App& app);
+void add_driver_commands(CLI::App& app);
 
 }  // namespace naneye::tools

@@ -14,11 +14,11 @@ enum class ColorMode : std::uint8_t { mono, bayer_grbg };
 struct Frame {
   Sensor sensor = Sensor::left;
   std::uint8_t seq = 0;
-  std::uint32_t ticks = 0;         // as received, 48 MHz, wraps every 89.48 s
-  std::uint64_t ticks64 = 0;       // extended across wraps, from the stream's first record
-  std::int64_t sensor_ns = 0;      // ticks64 in ns
-  std::int64_t host_ns = 0;        // CLOCK_MONOTONIC when the record's last byte arrived
-  bool reference_ok = true;        // the spec's reference-pixel sanity check
+  std::uint32_t ticks = 0;     // as received, 48 MHz, wraps every 89.48 s
+  std::uint64_t ticks64 = 0;   // extended across wraps, from the stream's first record
+  std::int64_t sensor_ns = 0;  // ticks64 in ns
+  std::int64_t host_ns = 0;    // CLOCK_MONOTONIC when the record's last byte arrived
+  bool reference_ok = true;    // the spec's reference-pixel sanity check
   ColorMode color = ColorMode::mono;
   // 250 x 250, row-major, 10-bit values. Column 249 and row 249 columns 248-249 are padding
   // (see is_padding()); their values are kept as received.
@@ -27,7 +27,9 @@ struct Frame {
   static constexpr bool is_padding(int row, int col) {
     return col == kSensorSize - 1 || (row == kSensorSize - 1 && col >= kSensorSize - 2);
   }
-  std::uint16_t at(int row, int col) const { return pixels[static_cast<std::size_t>(row) * kSensorSize + col]; }
+  std::uint16_t at(int row, int col) const {
+    return pixels[static_cast<std::size_t>(row) * kSensorSize + col];
+  }
 };
 
 struct StereoPair {

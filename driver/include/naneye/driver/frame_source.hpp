@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -24,6 +25,7 @@ struct SourceCounters {
   std::uint64_t sync_losses = 0;         // header not where expected: acquisition restarted
   std::uint64_t seq_gaps = 0;            // records lost upstream (sum of seq jumps)
   std::uint64_t cut_records = 0;         // records cut short, dropped
+  std::uint64_t corrupt_records = 0;     // pixel values above 1023 (misaligned or damaged bytes), dropped
   std::uint64_t reference_failures = 0;  // reference-pixel check failed
   std::uint64_t unpaired = 0;            // frames that found no partner within the tolerance
   std::uint64_t pairs = 0;               // pairs handed to the consumer
@@ -41,6 +43,14 @@ struct SourceInfo {
   double nominal_fps = 0;  // 0 when unknown
 };
 
+// Sees every transfer exactly as received, on the capture thread, before it is parsed (used by
+// `naneye record`). Must be quick: it runs in the capture path.
+class RawTap {
+ public:
+  virtual ~RawTap() = default;
+  virtual void on_bytes(std::span<const std::uint8_t> bytes, std::int64_t host_ns) = 0;
+};
+
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
@@ -53,6 +63,12 @@ class FrameSource {
   virtual SourceInfo info() const = 0;
   // Set when state() is failed, or for a replay that ended on a damaged file (where in it, and why).
   virtual std::optional<std::string> error() const = 0;
+  // Installs a tap for the raw bytes (before start(); nullptr removes it). Sources that have no raw
+  // byte stream (e.g. a simulator producing frames directly) return false; recorders then re-encode.
+  virtual bool set_raw_tap(RawTap* tap) {
+    (void)tap;
+    return false;
+  }
 };
 
 // Bad URIs, bad parameters, devices or files that cannot be opened.

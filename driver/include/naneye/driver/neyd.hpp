@@ -1,0 +1,91 @@
+#pragma once
+// .neyd, the project's capture container (docs/dump-format.md): a versioned header, then one chunk
+// per USB transfer (host CLOCK_MONOTONIC arrival time, length, CRC32 of the bytes, the bytes exactly
+// as received), then an end marker. Replay feeds the chunks to the very parser live capture runs.
+#include <cstdint>
+#include <cstdio>
+#include <istream>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "naneye/driver/frame_source.hpp"
+
+namespace naneye::driver {
+
+inline constexpr std::uint16_t kNeydVersion = 1;
+inline constexpr std::size_t kNeydMaxChunk = 64u << 20;  // larger lengths mean a damaged file
+inline constexpr std::size_t kNeydMaxNote = 1u << 20;
+
+struct NeydHeader {
+  std::uint16_t version = kNeydVersion;
+  std::uint16_t usb_vid = 0, usb_pid = 0;  // 0 when the source was not a USB board
+  std::int64_t start_wall_ns = 0;          // CLOCK_REALTIME at capture start
+  std::int64_t start_monotonic_ns = 0;     // CLOCK_MONOTONIC at capture start (chunk times' clock)
+  std::string note;                        // free text, by convention JSON (source URI, device, ...)
+};
+
+// A damaged or truncated file: what() says where (byte offset, chunk index) and what is wrong.
+class NeydError : public SourceError {
+ public:
+  NeydError(const std::string& what, std::uint64_t offset, std::uint64_t chunk)
+      : SourceError(what), offset_(offset), chunk_(chunk) {}
+  std::uint64_t offset() const { return offset_; }
+  std::uint64_t chunk() const { return chunk_; }
+
+ private:
+  std::uint64_t offset_, chunk_;
+};
+
+class NeydWriter {
+ public:
+  // Creates (truncates) `path` and writes the header; throws SourceError if it cannot.
+  NeydWriter(const std::string& path, const NeydHeader& header);
+  ~NeydWriter();  // closes without an end marker if close() was not called (the file reads as truncated)
+  NeydWriter(const NeydWriter&) = delete;
+  NeydWriter& operator=(const NeydWriter&) = delete;
+
+  void write_chunk(std::span<const std::uint8_t> bytes, std::int64_t host_ns);
+  // Writes the end marker and flushes; throws SourceError on an I/O error.
+  void close();
+  std::uint64_t chunks() const { return chunks_; }
+  std::uint64_t payload_bytes() const { return bytes_; }
+
+ private:
+  void put(const void* data, std::size_t n);
+  std::FILE* file_ = nullptr;
+  std::string path_;
+  std::uint64_t chunks_ = 0, bytes_ = 0;
+  bool failed_ = false;
+};
+
+class NeydReader {
+ public:
+  // Opens `path` and reads the header (throws NeydError / SourceError).
+  static bool is_neyd(const std::string& path);  // by magic
+  explicit NeydReader(const std::string& path);
+  // Reads from a stream (fuzzing, tests); the stream must outlive the reader.
+  explicit NeydReader(std::istream& in);
+
+  const NeydHeader& header() const { return header_; }
+  // The next chunk into `data` (its capacity is reused) and its arrival time. false at the end
+  // marker; NeydError for anything else (truncation, bad tag, CRC mismatch, counts).
+  bool next(std::vector<std::uint8_t>& data, std::int64_t& host_ns);
+  std::uint64_t offset() const { return offset_; }  // bytes consumed so far
+  std::uint64_t chunk_index() const { return chunk_; }
+
+ private:
+  void read_header();
+  std::size_t read(void* out, std::size_t n);
+  [[noreturn]] void fail(const std::string& what, std::uint64_t at) const;
+
+  std::unique_ptr<std::istream> owned_;
+  std::istream* in_ = nullptr;
+  std::string name_;
+  NeydHeader header_;
+  std::uint64_t offset_ = 0, chunk_ = 0, payload_ = 0;
+  bool ended_ = false;
+};
+
+}  // namespace naneye::driver
