@@ -1,5 +1,9 @@
 #include "naneye/daemon/processor.hpp"
 
+#include <optional>
+
+#include "naneye/recon/stereo_reconstructor.hpp"
+
 namespace naneye::daemon {
 
 void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out) {
@@ -12,22 +16,57 @@ void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out) 
   out.metrics.reset();
 }
 
+recon::RawImageView image_view(const driver::Frame& f) {
+  recon::RawImageView v;
+  v.data = f.pixels.data();
+  v.width = v.height = v.stride = driver::kSensorSize;
+  v.layout =
+      f.color == driver::ColorMode::bayer_grbg ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
+  return v;
+}
+
+recon::StereoReconstructorSettings reconstructor_settings(const Settings& s) {
+  recon::StereoReconstructorSettings r;
+  r.corners.rows = s.board_rows;
+  r.corners.cols = s.board_cols;
+  r.reconstruction.board.rows = s.board_rows;
+  r.reconstruction.board.cols = s.board_cols;
+  r.reconstruction.board.square_mm = s.square_mm;
+  r.reconstruction.corner_sigma_px = s.corner_sigma_px;
+  r.tracking = s.tracking;
+  return r;
+}
+
 namespace {
 
-// No detector is built into the daemon yet: a result per pair with its timestamps and no board.
-class TimestampsOnly final : public PairProcessor {
+// The product's processing step (issue #5): both eyes' corners, triangulation, board pose, P/D/R.
+class BoardReconstruction final : public PairProcessor {
  public:
-  void set_rig(const recon::StereoRig&) override {}
+  explicit BoardReconstruction(const Settings& s) : settings_(reconstructor_settings(s)) {}
+
+  void set_rig(const recon::StereoRig& rig) override {
+    if (reconstructor_)
+      reconstructor_->set_rig(rig);
+    else
+      reconstructor_.emplace(rig, settings_);
+  }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
     fill_pair_identity(pair, out);
+    if (reconstructor_) reconstructor_->process(image_view(pair.left), image_view(pair.right), out);
   }
-  std::string_view name() const override { return "timestamps-only (no corner detector wired in yet)"; }
+  std::string_view name() const override {
+    return "board reconstruction (corners, niter2 + refinement, board pose)";
+  }
+
+ private:
+  recon::StereoReconstructorSettings settings_;
+  std::optional<recon::StereoReconstructor> reconstructor_;
 };
 
 }  // namespace
 
-std::unique_ptr<PairProcessor> make_processor(const Settings&) {
-  return std::make_unique<TimestampsOnly>();
+std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
+  return std::make_unique<BoardReconstruction>(settings);
 }
 
 }  // namespace naneye::daemon

@@ -46,6 +46,11 @@ double get_double(const toml::node& n, const std::string& key, double lo, double
   return v;
 }
 
+bool get_bool(const toml::node& n, const std::string& key) {
+  if (!n.is_boolean()) fail(key, "expected true or false, got " + type_name(n));
+  return *n.value<bool>();
+}
+
 std::filesystem::path resolve(const std::filesystem::path& base, const std::string& p) {
   std::filesystem::path path(p);
   return path.is_relative() && !base.empty() ? (base / path).lexically_normal() : path;
@@ -85,6 +90,11 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
       {"pipeline.corner_sigma_px",
        [&s](const toml::node& n, const std::string& k) { s.corner_sigma_px = get_double(n, k, 1e-4, 10.0); }},
       {"pipeline.max_result_age_ms", integer(s.max_result_age_ms, 1, 3'600'000)},
+      {"board.rows", integer(s.board_rows, 2, 8)},
+      {"board.cols", integer(s.board_cols, 2, 8)},
+      {"board.square_mm",
+       [&s](const toml::node& n, const std::string& k) { s.square_mm = get_double(n, k, 0.01, 1000.0); }},
+      {"board.tracking", [&s](const toml::node& n, const std::string& k) { s.tracking = get_bool(n, k); }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
       {"pipeline.sse_queue_depth", integer(s.sse_queue_depth, 2, 4096)},

@@ -7,6 +7,7 @@
 
 #include "naneye/daemon/settings.hpp"
 #include "naneye/driver/frame.hpp"
+#include "naneye/recon/corners.hpp"
 #include "naneye/recon/pair_result.hpp"
 #include "naneye/recon/rig.hpp"
 
@@ -24,10 +25,12 @@ class PairProcessor {
   virtual std::string_view name() const = 0;
 };
 
-// The processing step naneyed runs. Until the corner detector and the triangulation are wired in,
-// this is TimestampsOnly: it reports every pair (index, timestamps) with board_found = false, and
-// says so in the log and /v1/status; it never invents corners.
+// The processing step naneyed and `naneye recon` run: recon::StereoReconstructor on both raw frames
+// (the board of settings' [board] section).
 std::unique_ptr<PairProcessor> make_processor(const Settings& settings);
+
+// A driver frame as the recon module sees it (no copy).
+recon::RawImageView image_view(const driver::Frame& frame);
 
 // Copies the pair's identity and timestamps into `out` and clears everything else.
 void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out);

@@ -28,6 +28,10 @@ struct Settings {
   int sse_queue_depth = 64;             // results queued per /v1/events client before it is dropped
   int sse_max_clients = 4;              // simultaneous /v1/events clients
   int frame_snapshot_interval_ms = 20;  // how often the latest frames are copied for /v1/frames
+  // [board] the calibration target seen by both eyes (the paper's 9 x 7 squares: 6 x 8 inner corners)
+  int board_rows = 6, board_cols = 8;  // inner corners
+  double square_mm = 5.99;
+  bool tracking = true;  // search around the previous pair's corners first
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error, critical, off
 };

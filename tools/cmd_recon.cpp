@@ -1,0 +1,131 @@
+// `naneye recon --calib FILE --input URI [--json]`: one result per stereo pair, in stream order, pairs
+// without a board included. A file is replayed at max speed with a lossless hand-over: no pair is
+// ever dropped. The per-pair step and the JSON are the daemon's own (one code path, one serializer).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "naneye/daemon/processor.hpp"
+#include "naneye/daemon/result_json.hpp"
+#include "naneye/recon/calibration_io.hpp"
+#include "registry.hpp"
+
+namespace naneye::tools {
+namespace {
+
+struct ReconOptions {
+  std::vector<std::string> calib;
+  std::string input;
+  bool json = false;
+  std::string pattern = "6x8";
+  double square_mm = 5.99;
+  double corner_sigma_px = 0.05;
+  bool no_tracking = false;
+  long long max_pairs = -1;
+};
+
+// A plain path, or a file:// URI without a speed, replays at max speed (lossless).
+std::string input_uri(const std::string& input) {
+  std::string uri = input.find("://") == std::string::npos ? "file://" + input : input;
+  if (uri.rfind("file://", 0) == 0 && uri.find("speed=") == std::string::npos)
+    uri += (uri.find('?') == std::string::npos ? "?" : "&") + std::string("speed=max");
+  return uri;
+}
+
+void parse_pattern(const std::string& text, int& rows, int& cols) {
+  char x = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d", &rows, &x, &cols) != 3 || (x != 'x' && x != 'X') || rows < 2 ||
+      cols < 2 || rows * cols > recon::kMaxCorners)
+    throw std::invalid_argument("--pattern must be ROWSxCOLS inner corners (e.g. 6x8), at most " +
+                                std::to_string(recon::kMaxCorners) + " corners; got '" + text + "'");
+}
+
+void print_line(const recon::PairResult& r) {
+  if (!r.board_found) {
+    std::printf("pair %llu  no board\n", static_cast<unsigned long long>(r.pair));
+    return;
+  }
+  int valid = 0;
+  double sigma = 0;
+  for (int i = 0; i < r.point_count; ++i) {
+    valid += r.points[i].valid;
+    if (r.points[i].valid) sigma += r.points[i].depth_sigma_mm;
+  }
+  std::printf("pair %llu  board at %.3f mm (pose rms %.4f px)  %d/%d points, mean depth sigma %.3f mm",
+              static_cast<unsigned long long>(r.pair), r.board->distance_mm, r.board->rms_px, valid,
+              r.point_count, valid ? sigma / valid : NAN);
+  if (r.metrics)
+    std::printf("  P %.4f mm  D %.4f mm  R %.4f px", r.metrics->planarity_mm, r.metrics->distance_error_mm,
+                r.metrics->reprojection_px);
+  std::printf("\n");
+}
+
+void run_recon(const ReconOptions& o) {
+  daemon::Settings settings;
+  parse_pattern(o.pattern, settings.board_rows, settings.board_cols);
+  settings.square_mm = o.square_mm;
+  settings.corner_sigma_px = o.corner_sigma_px;
+  settings.tracking = !o.no_tracking;
+  std::vector<std::filesystem::path> calib(o.calib.begin(), o.calib.end());
+  const recon::StereoRig rig = recon::load_rig(calib);
+
+  auto processor = daemon::make_processor(settings);
+  processor->set_rig(rig);
+  auto source = make_registry().open(input_uri(o.input));
+  source->start();
+  auto result = std::make_unique<recon::PairResult>();
+  long long pairs = 0, found = 0;
+  while (o.max_pairs < 0 || pairs < o.max_pairs) {
+    driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
+    if (!pair) {
+      const auto st = source->state();
+      if (st == driver::SourceState::finished || st == driver::SourceState::failed ||
+          st == driver::SourceState::stopped)
+        break;
+      continue;
+    }
+    processor->process(*pair, *result);
+    ++pairs;
+    found += result->board_found;
+    if (o.json)
+      std::cout << daemon::result_to_json(*result).dump() << "\n";
+    else
+      print_line(*result);
+  }
+  source->stop();
+  std::cout.flush();
+  std::fprintf(stderr, "naneye recon: %lld pairs, board found in %lld\n", pairs, found);
+  if (auto err = source->error()) throw std::runtime_error(*err);
+}
+
+}  // namespace
+
+void add_recon_commands(CLI::App& app) {
+  auto o = std::make_shared<ReconOptions>();
+  auto* cmd =
+      app.add_subcommand("recon", "3D points, board pose and the paper's P/D/R for every stereo pair");
+  cmd->add_option("--calib", o->calib, "Calibration YAML (one file, or intrinsics and extrinsics)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--input", o->input, "Source URI (file://, usb://, v4l2://, sim://) or a capture path")
+      ->required();
+  cmd->add_flag("--json", o->json, "One JSON object per pair (the daemon's /v1/depth object)");
+  cmd->add_option("--pattern", o->pattern, "Inner corners ROWSxCOLS")->capture_default_str();
+  cmd->add_option("--square-mm", o->square_mm, "Square size")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--corner-sigma-px", o->corner_sigma_px, "Corner sigma when a pair cannot measure its own")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--no-tracking", o->no_tracking, "Full search on every pair");
+  cmd->add_option("--max-pairs", o->max_pairs, "Stop after this many pairs (live sources)");
+  cmd->callback([o] { run_recon(*o); });
+}
+
+}  // namespace naneye::tools
