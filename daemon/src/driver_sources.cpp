@@ -1,5 +1,7 @@
 #include "naneye/daemon/source_select.hpp"
+#include "naneye/driver/device_list.hpp"
 #include "naneye/driver/source_registry.hpp"
+#include "naneye/driver/usb_profile.hpp"
 #include "naneye/sim/sim_source.hpp"
 
 namespace naneye::daemon {
@@ -11,9 +13,17 @@ SourceFactory driver_source_factory() {
 }
 
 std::vector<std::string> attached_boards() {
-  // The driver has no enumeration of readout boards yet (it comes with the usb:// backend); until
-  // then "auto" always falls back to the sample capture, and says so.
-  return {};
+  // The boards of the device profiles (config/devices/), or the built-in ones when none are
+  // installed; each entry's URI opens exactly that board (by serial when it could be read).
+  std::vector<driver::UsbProfile> profiles;
+  try {
+    profiles = driver::load_usb_profiles(driver::default_profile_dir());
+  } catch (const std::exception&) {
+  }
+  if (profiles.empty()) profiles = driver::builtin_usb_profiles();
+  std::vector<std::string> uris;
+  for (const auto& board : driver::list_usb_boards(profiles)) uris.push_back(board.uri);
+  return uris;
 }
 
 }  // namespace naneye::daemon
