@@ -39,6 +39,16 @@ recon::StereoReconstructorSettings reconstructor_settings(const Settings& s) {
 
 namespace {
 
+// board.detect = false: every pair is published with its timing and frames, and no board.
+class TimingOnly final : public PairProcessor {
+ public:
+  void set_rig(const recon::StereoRig&) override {}
+  void process(const driver::StereoPair& pair, recon::PairResult& out) override {
+    fill_pair_identity(pair, out);
+  }
+  std::string_view name() const override { return "timing only (board.detect = false)"; }
+};
+
 // The product's processing step (issue #5): both eyes' corners, triangulation, board pose, P/D/R.
 class BoardReconstruction final : public PairProcessor {
  public:
@@ -66,6 +76,7 @@ class BoardReconstruction final : public PairProcessor {
 }  // namespace
 
 std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
+  if (!settings.detect) return std::make_unique<TimingOnly>();
   return std::make_unique<BoardReconstruction>(settings);
 }
 

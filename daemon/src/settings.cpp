@@ -95,6 +95,7 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
       {"board.square_mm",
        [&s](const toml::node& n, const std::string& k) { s.square_mm = get_double(n, k, 0.01, 1000.0); }},
       {"board.tracking", [&s](const toml::node& n, const std::string& k) { s.tracking = get_bool(n, k); }},
+      {"board.detect", [&s](const toml::node& n, const std::string& k) { s.detect = get_bool(n, k); }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
       {"pipeline.sse_queue_depth", integer(s.sse_queue_depth, 2, 4096)},

@@ -37,7 +37,10 @@ class NaneyedTest : public ::testing::Test {
     const auto cfg = dir.path / "naneyed.toml";
     std::ofstream(cfg) << "[calibration]\npath = \"" << calib_path()
                        << "\"\n[http]\nhost = \"127.0.0.1\"\nport = 0\n"
-                       << extra;
+                       << extra
+                       // These tests exercise the service (timing, streaming, endpoints) on captures
+                       // without a board; the board path is tested where a test asks for [board].
+                       << (extra.find("[board]") == std::string::npos ? "[board]\ndetect = false\n" : "");
     args.insert(args.begin(), {"--config", cfg.string()});
     daemon = std::make_unique<DaemonProcess>(args, dir.path / "naneyed.log");
     const auto p = daemon->wait_port();

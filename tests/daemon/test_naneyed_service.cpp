@@ -1,5 +1,7 @@
 // naneyed as a service: event streams, shutdown, reload, configuration checks.
+#include <Eigen/Core>
 #include <atomic>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -165,7 +167,7 @@ TEST_F(NaneyedTest, TheBundledCaptureIsServedWithItsTruthTimestamps) {
   const auto truth_json = nlohmann::json::parse(in);
   const auto& pairs = truth_json.at("pairs");
   const auto n = pairs.size();
-  start("[source]\nuri = \"file://" + dir_data + "capture.raw?speed=max\"\n");
+  start("[source]\nuri = \"file://" + dir_data + "capture.raw?speed=max\"\n[board]\ndetect = true\n");
   wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
   const auto events = read_events(*client, "/v1/events?last_event_id=0", n);
   ASSERT_EQ(events.size(), n);
@@ -181,6 +183,19 @@ TEST_F(NaneyedTest, TheBundledCaptureIsServedWithItsTruthTimestamps) {
                 static_cast<double>(pairs[k].at("t_right_ns").get<std::int64_t>() -
                                     pairs[k].at("t_left_ns").get<std::int64_t>()),
                 1.0);
+    // The board where the truth has one in full view, at the truth's distance (board pose: a few um).
+    const bool in_view = pairs[k].at("board_in_view").get<bool>();
+    EXPECT_EQ(d["board_found"].get<bool>(), in_view) << k;
+    if (in_view && d["board_found"].get<bool>()) {
+      Eigen::Matrix3d R;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) R(r, c) = pairs[k].at("board_rotation")[r][c].get<double>();
+      const Eigen::Vector3d t(pairs[k].at("board_translation_mm")[0].get<double>(),
+                              pairs[k].at("board_translation_mm")[1].get<double>(),
+                              pairs[k].at("board_translation_mm")[2].get<double>());
+      EXPECT_NEAR(d["board"]["distance_mm"].get<double>(), std::abs(R.col(2).dot(t)), 0.01) << k;
+      EXPECT_LT(d["metrics"]["reprojection_px"].get<double>(), 0.05) << k;
+    }
   }
   const auto st = get_json("/v1/status");
   EXPECT_EQ(st["counters"]["pairs_dropped"], 0);

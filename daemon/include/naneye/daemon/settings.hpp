@@ -32,6 +32,7 @@ struct Settings {
   int board_rows = 6, board_cols = 8;  // inner corners
   double square_mm = 5.99;
   bool tracking = true;  // search around the previous pair's corners first
+  bool detect = true;    // false: serve frames and timing only (a rig without a target in view)
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error, critical, off
 };
