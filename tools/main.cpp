@@ -5,15 +5,10 @@
 
 #include <exception>
 #include <iostream>
-#include <opencv2/core/utility.hpp>
 
 #include "commands.hpp"
 
 int main(int argc, char** argv) {
-  // The per-pair step is written for one core. OpenCV's own thread pool (TBB workers that spin while
-  // idle) would only take the other core from the capture and HTTP threads: measured, it tripled the
-  // time per pair in naneyed on 2 cores.
-  cv::setNumThreads(1);
   // Logs go to stderr so that stdout stays machine-readable (JSON lines).
   spdlog::set_default_logger(spdlog::stderr_color_mt("cli"));
   CLI::App app{"naneye: NanEye Stereo capture, replay and 3D reconstruction tools"};

@@ -11,7 +11,6 @@
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
-#include <opencv2/core/utility.hpp>
 
 #include "naneye/daemon/http_server.hpp"
 #include "naneye/daemon/pipeline.hpp"
@@ -94,10 +93,6 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
 
 int main(int argc, char** argv) {
   Flags f;
-  // The per-pair step is written for one core. OpenCV's own thread pool (TBB workers that spin while
-  // idle) would only take the other core from the capture and HTTP threads: measured, it tripled the
-  // time per pair in naneyed on 2 cores.
-  cv::setNumThreads(1);
   CLI::App app{"naneyed: NanEye Stereo depth service (HTTP/JSON, docs/http-api.md)"};
   app.add_option("--config", f.config, "TOML configuration file")->default_str(NANEYE_DEFAULT_CONFIG);
   app.add_option("--source", f.source,

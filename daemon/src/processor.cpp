@@ -1,5 +1,6 @@
 #include "naneye/daemon/processor.hpp"
 
+#include <opencv2/core/utility.hpp>
 #include <optional>
 
 #include "naneye/recon/stereo_reconstructor.hpp"
@@ -77,6 +78,10 @@ class BoardReconstruction final : public PairProcessor {
 
 std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
   if (!settings.detect) return std::make_unique<TimingOnly>();
+  // The per-pair step is written for one core. OpenCV's own thread pool (TBB workers that spin while
+  // idle) only takes the other core from the capture and HTTP threads: measured, it tripled naneyed's
+  // time per pair on 2 cores (and its uninstrumented threads blind ThreadSanitizer).
+  cv::setNumThreads(1);
   return std::make_unique<BoardReconstruction>(settings);
 }
 
