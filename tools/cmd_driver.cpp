@@ -23,19 +23,9 @@ namespace {
 using driver::SourceCounters;
 
 nlohmann::json counters_json(const SourceCounters& c) {
-  return {{"bytes", c.bytes},
-          {"records", c.records},
-          {"sync_losses", c.sync_losses},
-          {"seq_gaps", c.seq_gaps},
-          {"cut_records", c.cut_records},
-          {"corrupt_records", c.corrupt_records},
-          {"reference_failures", c.reference_failures},
-          {"unpaired", c.unpaired},
-          {"pairs", c.pairs},
-          {"pairs_dropped", c.pairs_dropped},
-          {"reconnects", c.reconnects},
-          {"transfer_errors", c.transfer_errors},
-          {"stalls", c.stalls}};
+  nlohmann::json j = nlohmann::json::object();
+  for_each_counter(c, [&j](const char* name, const char*, std::uint64_t v) { j[name] = v; });
+  return j;
 }
 
 // Ctrl-C / SIGTERM end a recording cleanly: the signals are blocked in every thread and a watcher

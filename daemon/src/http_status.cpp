@@ -9,18 +9,9 @@ nlohmann::json latency_json(const LatencyRecorder::Snapshot& l) {
 }
 
 nlohmann::json counters_json(const driver::SourceCounters& c) {
-  return {{"bytes", c.bytes},
-          {"records", c.records},
-          {"sync_losses", c.sync_losses},
-          {"seq_gaps", c.seq_gaps},
-          {"cut_records", c.cut_records},
-          {"reference_failures", c.reference_failures},
-          {"unpaired", c.unpaired},
-          {"pairs", c.pairs},
-          {"pairs_dropped", c.pairs_dropped},
-          {"reconnects", c.reconnects},
-          {"transfer_errors", c.transfer_errors},
-          {"stalls", c.stalls}};
+  nlohmann::json j = nlohmann::json::object();
+  driver::for_each_counter(c, [&j](const char* name, const char*, std::uint64_t v) { j[name] = v; });
+  return j;
 }
 
 }  // namespace

@@ -36,22 +36,9 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   counter(os, "naneye_pairs_processed_total", "Stereo pairs reconstructed by the worker.", s.pairs_processed);
   counter(os, "naneye_results_unpublished_total",
           "Results computed but not published because readers pinned every slot.", s.publish_skipped);
-  counter(os, "naneye_source_bytes_total", "Bytes received from the source.", c.bytes);
-  counter(os, "naneye_source_records_total", "Complete records delivered by the parser.", c.records);
-  counter(os, "naneye_source_sync_losses_total", "Times the parser lost and re-acquired sync.",
-          c.sync_losses);
-  counter(os, "naneye_source_seq_gaps_total", "Records lost upstream (sum of sequence jumps).", c.seq_gaps);
-  counter(os, "naneye_source_cut_records_total", "Records cut short and dropped.", c.cut_records);
-  counter(os, "naneye_source_reference_failures_total", "Records failing the reference-pixel check.",
-          c.reference_failures);
-  counter(os, "naneye_source_unpaired_total", "Frames that found no partner within the tolerance.",
-          c.unpaired);
-  counter(os, "naneye_source_pairs_total", "Pairs handed to the worker by the source.", c.pairs);
-  counter(os, "naneye_source_pairs_dropped_total", "Oldest pairs dropped because the worker fell behind.",
-          c.pairs_dropped);
-  counter(os, "naneye_source_reconnects_total", "Device reconnections.", c.reconnects);
-  counter(os, "naneye_source_transfer_errors_total", "Failed transfers.", c.transfer_errors);
-  counter(os, "naneye_source_stalls_total", "Stall timeouts of the source.", c.stalls);
+  driver::for_each_counter(c, [&os](const char* name, const char* help, std::uint64_t v) {
+    counter(os, std::string("naneye_source_") + name + "_total", help, v);
+  });
   counter(os, "naneye_source_opens_total", "Times the source was opened.", s.source_opens);
   counter(os, "naneye_calibration_reloads_total", "Calibration reloads (SIGHUP).", s.calibration_reloads);
   counter(os, "naneye_events_sent_total", "Server-sent events written to clients.", ctx.sse_events.load());

@@ -35,6 +35,25 @@ struct SourceCounters {
   std::uint64_t stalls = 0;
 };
 
+// Every counter with its name and meaning, in one place, so that each report (`naneye replay
+// --stats`, /v1/status, /metrics) lists them all: f(name, help, value).
+template <typename F>
+void for_each_counter(const SourceCounters& c, F&& f) {
+  f("bytes", "Bytes received from the source.", c.bytes);
+  f("records", "Complete records delivered by the parser.", c.records);
+  f("sync_losses", "Times the parser lost and re-acquired sync.", c.sync_losses);
+  f("seq_gaps", "Records lost upstream (sum of sequence jumps).", c.seq_gaps);
+  f("cut_records", "Records cut short and dropped.", c.cut_records);
+  f("corrupt_records", "Records with pixel values above 1023, dropped.", c.corrupt_records);
+  f("reference_failures", "Records failing the reference-pixel check.", c.reference_failures);
+  f("unpaired", "Frames that found no partner within the tolerance.", c.unpaired);
+  f("pairs", "Pairs handed to the consumer by the source.", c.pairs);
+  f("pairs_dropped", "Oldest pairs dropped because the consumer fell behind.", c.pairs_dropped);
+  f("reconnects", "Device reconnections.", c.reconnects);
+  f("transfer_errors", "Failed transfers.", c.transfer_errors);
+  f("stalls", "Stall timeouts of the source.", c.stalls);
+}
+
 struct SourceInfo {
   std::string uri;
   std::string kind;        // "usb", "v4l2", "file", "sim"
