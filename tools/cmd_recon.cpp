@@ -13,8 +13,8 @@
 #include "commands.hpp"
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
+#include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
-#include "registry.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -77,7 +77,7 @@ void run_recon(const ReconOptions& o) {
 
   auto processor = daemon::make_processor(settings);
   processor->set_rig(rig);
-  auto source = make_registry().open(input_uri(o.input));
+  auto source = daemon::make_source_registry().open(input_uri(o.input));
   source->start();
   auto result = std::make_unique<recon::PairResult>();
   long long pairs = 0, found = 0;

@@ -6,9 +6,14 @@
 
 namespace naneye::daemon {
 
+driver::SourceRegistry make_source_registry() {
+  driver::SourceRegistry registry = driver::make_default_registry();
+  sim::register_sim_source(registry);  // sim://: rendered live, for demos without a camera
+  return registry;
+}
+
 SourceFactory driver_source_factory() {
-  auto registry = std::make_shared<driver::SourceRegistry>(driver::make_default_registry());
-  sim::register_sim_source(*registry);  // sim://: rendered live, for demos without a camera
+  auto registry = std::make_shared<driver::SourceRegistry>(make_source_registry());
   return [registry](const std::string& uri) { return registry->open(uri); };
 }
 

@@ -30,8 +30,6 @@ recon::StereoReconstructorSettings reconstructor_settings(const Settings& s) {
   recon::StereoReconstructorSettings r;
   r.corners.rows = s.board_rows;
   r.corners.cols = s.board_cols;
-  r.reconstruction.board.rows = s.board_rows;
-  r.reconstruction.board.cols = s.board_cols;
   r.reconstruction.board.square_mm = s.square_mm;
   r.reconstruction.corner_sigma_px = s.corner_sigma_px;
   r.tracking = s.tracking;
