@@ -5,6 +5,7 @@
 namespace naneye::tools {
 
 void add_calib_commands(CLI::App& app);
+void add_calibrate_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
 void add_driver_commands(CLI::App& app);
 void add_sim_commands(CLI::App& app);

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   CLI::App app{"naneye: NanEye Stereo capture, replay and 3D reconstruction tools"};
   app.require_subcommand(1);
   naneye::tools::add_calib_commands(app);
+  naneye::tools::add_calibrate_commands(app);
   naneye::tools::add_devices_commands(app);
   naneye::tools::add_driver_commands(app);
   naneye::tools::add_sim_commands(app);

@@ -1,0 +1,153 @@
+// Board views for `naneye calibrate`: every pair of every input, the board detected in each eye by a
+// full search (views are independent: no tracking), both eyes' numbering made to agree.
+#include "calibrate_views.hpp"
+
+#include <unistd.h>
+
+#include <spdlog/spdlog.h>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "naneye/daemon/source_select.hpp"
+#include "naneye/recon/corners_stereo.hpp"
+
+namespace naneye::tools {
+
+Progress::Progress(int log_every) : tty_(::isatty(STDERR_FILENO) == 1), log_every_(log_every) {}
+
+Progress::~Progress() {
+  if (open_) std::fputs("\n", stderr);
+}
+
+void Progress::update(const std::string& text, bool force_log) {
+  if (tty_) {
+    std::fprintf(stderr, "\r\033[K%s", text.c_str());
+    std::fflush(stderr);
+    open_ = true;
+  } else if (force_log || ++count_ % log_every_ == 0) {
+    spdlog::info("{}", text);
+  }
+}
+
+void Progress::done(const std::string& text) {
+  if (tty_) {
+    std::fprintf(stderr, "\r\033[K%s\n", text.c_str());
+    open_ = false;
+  } else {
+    spdlog::info("{}", text);
+  }
+}
+
+std::vector<InputUri> expand_input(const std::string& input) {
+  std::vector<InputUri> uris;
+  const bool is_uri = input.find("://") != std::string::npos;
+  if (!is_uri && std::filesystem::is_directory(input)) {
+    std::vector<std::filesystem::path> files;
+    for (const auto& e : std::filesystem::directory_iterator(input)) {
+      const auto ext = e.path().extension();
+      if (e.is_regular_file() && (ext == ".raw" || ext == ".neyd")) files.push_back(e.path());
+    }
+    if (files.empty()) throw std::runtime_error(input + ": folder holds no .raw or .neyd capture");
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) uris.push_back({"file://" + f.string() + "?speed=max", f.string()});
+    return uris;
+  }
+  if (!is_uri && !std::filesystem::exists(input))
+    throw std::runtime_error(input + ": no such file or folder");
+  std::string uri = is_uri ? input : "file://" + input;
+  // Replaying a file at max speed hands every pair over (lossless); real time would drop none either
+  // but take the capture's duration.
+  if (uri.rfind("file://", 0) == 0 && uri.find("speed=") == std::string::npos)
+    uri += (uri.find('?') == std::string::npos ? "?" : "&") + std::string("speed=max");
+  uris.push_back({uri, input});
+  return uris;
+}
+
+namespace {
+
+recon::RawImageView image_view(const driver::Frame& f) {
+  recon::RawImageView v;
+  v.data = f.pixels.data();
+  v.width = v.height = v.stride = driver::kSensorSize;
+  v.layout =
+      f.color == driver::ColorMode::bayer_grbg ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
+  return v;
+}
+
+std::vector<recon::BoardCorner> corners_of(const recon::CornerResult& r) {
+  std::vector<recon::BoardCorner> out;
+  for (int i = 0; i < r.count; ++i) {
+    const auto& c = r.corners[static_cast<std::size_t>(i)];
+    out.push_back({c.row, c.col, c.px});
+  }
+  return out;
+}
+
+}  // namespace
+
+CollectedViews collect_views(const std::vector<std::string>& inputs, const recon::StereoRig& guess,
+                             const recon::CornerSettings& corners, long long max_pairs, Progress& progress) {
+  CollectedViews out;
+  recon::CornerDetector detect_left(guess.left, corners), detect_right(guess.right, corners);
+  recon::CornerResult left, right;
+  const auto registry = daemon::make_source_registry();
+  for (const std::string& input : inputs) {
+    for (const auto& [uri, label] : expand_input(input)) {
+      std::unique_ptr<driver::FrameSource> source;
+      try {
+        source = registry.open(uri);
+        source->start();
+      } catch (const std::exception& e) {
+        throw std::runtime_error(uri + ": cannot be read: " + e.what());
+      }
+      unsigned long long index = 0;
+      while (max_pairs <= 0 || static_cast<long long>(index) < max_pairs) {
+        driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
+        if (!pair) {
+          const auto st = source->state();
+          if (st == driver::SourceState::finished || st == driver::SourceState::failed ||
+              st == driver::SourceState::stopped)
+            break;
+          continue;
+        }
+        ++out.pairs;
+        const bool l = detect_left.detect_full(image_view(pair->left), left);
+        const bool r = detect_right.detect_full(image_view(pair->right), right);
+        if (l || r) {
+          recon::CalibrationView v;
+          if (l) v.left = corners_of(left);
+          if (r) {
+            bool keep = true;
+            if (l) {
+              const auto check = recon::resolve_stereo_ids(guess, left, right);
+              keep = check.status == recon::StereoIdStatus::consistent ||
+                     check.status == recon::StereoIdStatus::flipped_right;
+              out.ambiguous += !keep;
+            }
+            if (keep) v.right = corners_of(right);
+          }
+          out.one_eye += v.left.empty() || v.right.empty();
+          out.views.push_back(std::move(v));
+          out.sources.push_back({label, index});
+        } else {
+          ++out.no_board;
+        }
+        ++index;
+        progress.update("detecting boards: " + std::to_string(out.pairs) + " pairs read, " +
+                        std::to_string(out.views.size()) + " boards found");
+      }
+      source->stop();
+      if (auto err = source->error()) throw std::runtime_error(uri + ": cannot be read: " + *err);
+      if (index == 0) throw std::runtime_error(uri + ": no stereo pair could be read");
+    }
+  }
+  progress.done("detected boards: " + std::to_string(out.views.size()) + " views in " +
+                std::to_string(out.pairs) + " pairs (" + std::to_string(out.no_board) +
+                " skipped without a full board in either eye)");
+  return out;
+}
+
+}  // namespace naneye::tools

@@ -1,0 +1,130 @@
+// `naneye calibrate --input URI [--input URI ...] --pattern 6x8 --square-mm 5.99 -o calib.yaml`: detect the
+// board in every pair, calibrate both cameras and the stereo pose in one bundle (recon/calibrate.hpp),
+// print every parameter with its sigma, and write the calibration YAML that everything else reads.
+// Nothing is written when anything fails.
+#include <spdlog/spdlog.h>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "calibrate_views.hpp"
+#include "commands.hpp"
+#include "naneye/recon/calibration_io.hpp"
+#include "naneye/sim/presets.hpp"
+
+namespace naneye::tools {
+namespace {
+
+struct CalibrateOptions {
+  std::vector<std::string> inputs;
+  std::string pattern = "6x8";
+  double square_mm = 5.99;
+  std::string output;
+  std::vector<std::string> guess;
+  bool fix_k3 = false, tangential = false, cross_validate = false, json = false;
+  long long max_pairs = 0;
+  int train_views = 10;
+};
+
+void parse_pattern(const std::string& text, int& rows, int& cols) {
+  char x = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d", &rows, &x, &cols) != 3 || (x != 'x' && x != 'X') || rows < 2 ||
+      cols < 2 || rows * cols > recon::kMaxCorners)
+    throw std::invalid_argument("--pattern must be ROWSxCOLS inner corners (e.g. 6x8), at most " +
+                                std::to_string(recon::kMaxCorners) + " corners; got '" + text + "'");
+}
+
+// Written next to the target and renamed over it, so a failed write never leaves half a file.
+void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& out) {
+  const std::filesystem::path tmp = out.parent_path() / ("." + out.stem().string() + ".partial.yaml");
+  try {
+    recon::save_rig(rig, tmp);
+    std::filesystem::rename(tmp, out);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
+}
+
+void run_calibrate(const CalibrateOptions& o) {
+  recon::CornerSettings corners;
+  parse_pattern(o.pattern, corners.rows, corners.cols);
+  const recon::BoardGeometry board{corners.rows, corners.cols, o.square_mm};
+  std::vector<std::filesystem::path> guess_files(o.guess.begin(), o.guess.end());
+  if (guess_files.empty()) guess_files.push_back(sim::find_calibration("paper-d3.yaml"));
+  const recon::StereoRig guess = recon::load_rig(guess_files);
+
+  Progress progress;
+  const CollectedViews views = collect_views(o.inputs, guess, corners, o.max_pairs, progress);
+  if (views.views.empty())
+    throw std::runtime_error("no board found in " + std::to_string(views.pairs) +
+                             " pairs: check --pattern (" + o.pattern + " inner corners) and the inputs");
+
+  recon::CalibrationSettings settings;
+  settings.fix_k3 = o.fix_k3;
+  settings.tangential = o.tangential;
+  settings.image_width = guess.left.width();
+  settings.image_height = guess.left.height();
+  settings.initial = &guess;
+  const recon::CalibrationResult res =
+      recon::calibrate_stereo(views.views, board, settings, [&](const recon::CalibrationProgress& p) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "optimising: iteration %d, RMS %.5f px", p.iteration, p.rms_px);
+        progress.update(buf);
+      });
+  if (!res.ok) throw std::runtime_error("calibration failed: " + res.message);
+  progress.done("optimised: " + res.message);
+
+  std::unique_ptr<recon::SplitValidation> splits;
+  std::unique_ptr<recon::OddEvenValidation> odd_even;
+  if (o.cross_validate) {
+    progress.update(
+        "cross-validating: " + std::to_string(3) + " splits of " + std::to_string(o.train_views) + " views",
+        true);
+    splits = std::make_unique<recon::SplitValidation>(
+        recon::cross_validate_splits(views.views, board, settings, 3, o.train_views));
+    progress.update("cross-validating: odd against even views", true);
+    odd_even = std::make_unique<recon::OddEvenValidation>(
+        recon::cross_validate_odd_even(views.views, board, settings));
+    progress.done("cross-validation done");
+  }
+  write_atomically(res.rig, o.output);
+  print_report(res, views, splits.get(), odd_even.get(), settings, {o.json, o.output});
+}
+
+}  // namespace
+
+void add_calibrate_commands(CLI::App& app) {
+  auto o = std::make_shared<CalibrateOptions>();
+  auto* cmd = app.add_subcommand(
+      "calibrate", "Calibrate both cameras and the stereo pose from checkerboard captures (one LM bundle)");
+  cmd->add_option("--input", o->inputs,
+                  "Source URI (file://, sim://...), a .raw/.neyd capture, or a folder of them; repeatable")
+      ->required();
+  cmd->add_option("--pattern", o->pattern, "Inner corners ROWSxCOLS")->capture_default_str();
+  cmd->add_option("--square-mm", o->square_mm, "Square size")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("-o,--output", o->output, "Calibration YAML to write")->required();
+  cmd->add_option("--guess", o->guess,
+                  "Calibration that models the lenses for corner detection and starts the optimisation "
+                  "(default: the paper's Dataset 3)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--fix-k3", o->fix_k3, "Fix k3 = 0 (the paper's Datasets 1 and 2)");
+  cmd->add_flag("--tangential", o->tangential, "Estimate the tangential terms p1, p2 too");
+  cmd->add_flag("--cross-validate", o->cross_validate,
+                "Add the paper's 3 splits (calibrate on --train-views, reconstruct the rest) and odd/even");
+  cmd->add_option("--train-views", o->train_views, "Views per cross-validation calibration")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 1000));
+  cmd->add_option("--max-pairs", o->max_pairs,
+                  "Read at most this many pairs per input (needed for live sources)");
+  cmd->add_flag("--json", o->json, "Print the report as one JSON object");
+  cmd->callback([o] { run_calibrate(*o); });
+}
+
+}  // namespace naneye::tools
