@@ -22,8 +22,9 @@ struct CliRun {
   std::string out;
 };
 
-CliRun run_cli(const std::string& args) {
-  const std::string cmd = std::string(NANEYE_CLI) + " " + args + " 2>&1";
+// stdout, and stderr too when merge_stderr is set.
+CliRun run_cli(const std::string& args, bool merge_stderr = true) {
+  const std::string cmd = std::string(NANEYE_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
   CliRun r;
   FILE* p = ::popen(cmd.c_str(), "r");
   if (!p) return r;
@@ -72,10 +73,10 @@ TEST_F(CalibrateCli, WritesACalibrationThatLoadRigReads) {
 
 TEST_F(CalibrateCli, JsonReportAndFixK3) {
   const auto out = dir_ / "calib.yaml";
-  const CliRun r = run_cli("calibrate --json --fix-k3 --input " + data("sim-d3-mono") + " -o " +
-                           out.string() + " 2>/dev/null");
+  const CliRun r =
+      run_cli("calibrate --json --fix-k3 --input " + data("sim-d3-mono") + " -o " + out.string(), false);
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  const auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["ok"].get<bool>());
   EXPECT_EQ(j["pairs"].get<int>(), 12);
   EXPECT_EQ(j["views_used"].get<int>(), static_cast<int>(j["views"].size()));
