@@ -89,9 +89,9 @@ Eigen::Matrix3d rodrigues_jacobian(const Eigen::Matrix3d& R) {
   for (int k = 0; k < 3; ++k) {
     Eigen::Vector3d w = Eigen::Vector3d::Zero();
     w(k) = h;
-    D.col(k) =
-        (rodrigues(Eigen::Matrix3d(rodrigues(w) * R)) - rodrigues(Eigen::Matrix3d(rodrigues(Eigen::Vector3d(-w)) * R))) /
-        (2 * h);
+    D.col(k) = (rodrigues(Eigen::Matrix3d(rodrigues(w) * R)) -
+                rodrigues(Eigen::Matrix3d(rodrigues(Eigen::Vector3d(-w)) * R))) /
+               (2 * h);
   }
   return D;
 }
@@ -177,6 +177,15 @@ CalibrationResult calibrate_stereo(std::span<const CalibrationView> views, const
   CalibrationResult out;
   std::vector<CalibrationView> used;
   for (std::size_t v = 0; v < views.size(); ++v) {
+    for (const auto* eye : {&views[v].left, &views[v].right})
+      for (const BoardCorner& c : *eye)
+        if (c.row < 0 || c.row >= board.rows || c.col < 0 || c.col >= board.cols || !c.px.allFinite()) {
+          out.message = "view " + std::to_string(v) + ": corner (" + std::to_string(c.row) + ", " +
+                        std::to_string(c.col) + ") is not an inner corner of a " +
+                        std::to_string(board.rows) + "x" + std::to_string(board.cols) +
+                        " board or its pixel is not finite";
+          return out;
+        }
     if (views[v].left.size() < 4 && views[v].right.size() < 4) {
       out.skipped_views.push_back(static_cast<int>(v));
       continue;

@@ -111,6 +111,13 @@ TEST(CalibrateOptions, RefusesTooFewViewsAndNoStereo) {
     EXPECT_FALSE(res.ok);
     EXPECT_NE(res.message.find("both eyes"), std::string::npos) << res.message;
   }
+  {
+    auto bad = views;
+    bad[1].left[3].row = 6;  // a 6 x 8 board has rows 0..5
+    const auto res = recon::calibrate_stereo(bad, test::recon_board(), {});
+    EXPECT_FALSE(res.ok);
+    EXPECT_NE(res.message.find("view 1: corner (6, "), std::string::npos) << res.message;
+  }
   const auto empty = recon::calibrate_stereo(std::vector<recon::CalibrationView>{}, test::recon_board(), {});
   EXPECT_FALSE(empty.ok);
 }
