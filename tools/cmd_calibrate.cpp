@@ -26,6 +26,7 @@ struct CalibrateOptions {
   std::vector<std::string> guess;
   bool fix_k3 = false, tangential = false, cross_validate = false, json = false;
   long long max_pairs = 0;
+  int max_views = 100;
   int train_views = 10;
 };
 
@@ -35,6 +36,23 @@ void parse_pattern(const std::string& text, int& rows, int& cols) {
       cols < 2 || rows * cols > recon::kMaxCorners)
     throw std::invalid_argument("--pattern must be ROWSxCOLS inner corners (e.g. 6x8), at most " +
                                 std::to_string(recon::kMaxCorners) + " corners; got '" + text + "'");
+}
+
+// The bundle is dense (its Jacobian holds 6 columns per view), so a long recording is thinned to
+// evenly spaced views: consecutive pairs of a video add little that their neighbours do not.
+void thin_views(CollectedViews& v, int max_views) {
+  const std::size_t n = v.views.size();
+  if (max_views <= 0 || n <= static_cast<std::size_t>(max_views)) return;
+  CollectedViews kept = v;
+  kept.views.clear();
+  kept.sources.clear();
+  for (int i = 0; i < max_views; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i) * n / static_cast<std::size_t>(max_views);
+    kept.views.push_back(v.views[k]);
+    kept.sources.push_back(v.sources[k]);
+  }
+  spdlog::info("using {} of {} views, evenly spaced (--max-views)", max_views, n);
+  v = std::move(kept);
 }
 
 // Written next to the target and renamed over it, so a failed write never leaves half a file.
@@ -59,10 +77,11 @@ void run_calibrate(const CalibrateOptions& o) {
   const recon::StereoRig guess = recon::load_rig(guess_files);
 
   Progress progress;
-  const CollectedViews views = collect_views(o.inputs, guess, corners, o.max_pairs, progress);
+  CollectedViews views = collect_views(o.inputs, guess, corners, o.max_pairs, progress);
   if (views.views.empty())
     throw std::runtime_error("no board found in " + std::to_string(views.pairs) +
                              " pairs: check --pattern (" + o.pattern + " inner corners) and the inputs");
+  thin_views(views, o.max_views);
 
   recon::CalibrationSettings settings;
   settings.fix_k3 = o.fix_k3;
@@ -123,6 +142,9 @@ void add_calibrate_commands(CLI::App& app) {
       ->check(CLI::Range(3, 1000));
   cmd->add_option("--max-pairs", o->max_pairs,
                   "Read at most this many pairs per input (needed for live sources)");
+  cmd->add_option("--max-views", o->max_views, "Calibrate on at most this many views, evenly spaced (0: all)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--json", o->json, "Print the report as one JSON object");
   cmd->callback([o] { run_calibrate(*o); });
 }

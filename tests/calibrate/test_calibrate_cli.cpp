@@ -129,3 +129,17 @@ TEST_F(CalibrateCli, RefusesBadInputAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(out));
   EXPECT_TRUE(std::filesystem::is_empty(dir_));
 }
+
+TEST_F(CalibrateCli, MaxViewsThinsEvenly) {
+  const auto out = dir_ / "calib.yaml";
+  const CliRun r = run_cli(
+      "calibrate --json --max-views 4 --input " + data("sim-d3-mono/capture.raw") + " -o " + out.string(),
+      false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["views"].size(), 4u);
+  // 9 boards found (pairs 1-5, 7-9, 11), every other one kept: pairs 1, 3, 5, 8.
+  std::vector<int> pairs;
+  for (const auto& v : j["views"]) pairs.push_back(v["pair"].get<int>());
+  EXPECT_EQ(pairs, (std::vector<int>{1, 3, 5, 8}));
+}
