@@ -5,7 +5,9 @@
 #include <spdlog/spdlog.h>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -56,10 +58,17 @@ void thin_views(CollectedViews& v, int max_views) {
 }
 
 // Written next to the target and renamed over it, so a failed write never leaves half a file.
-void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& out) {
+// The provenance goes in as YAML comments, which load_rig (and OpenCV) skip.
+void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& out,
+                      const std::string& provenance) {
   const std::filesystem::path tmp = out.parent_path() / ("." + out.stem().string() + ".partial.yaml");
   try {
     recon::save_rig(rig, tmp);
+    {
+      std::ofstream f(tmp, std::ios::app);
+      f << provenance;
+      if (!f) throw std::runtime_error(out.string() + ": cannot be written");
+    }
     std::filesystem::rename(tmp, out);
   } catch (...) {
     std::error_code ec;
@@ -111,7 +120,14 @@ void run_calibrate(const CalibrateOptions& o) {
         recon::cross_validate_odd_even(views.views, board, settings));
     progress.done("cross-validation done");
   }
-  write_atomically(res.rig, o.output);
+  std::ostringstream provenance;
+  provenance << "# naneye calibrate: " << res.message << "; worst " << res.worst_px << " px, noise estimate "
+             << res.sigma_px << " px per coordinate\n# pattern " << o.pattern << ", square " << o.square_mm
+             << " mm, k3 " << (o.fix_k3 ? "fixed at 0" : "free") << ", tangential "
+             << (o.tangential ? "free" : "fixed at 0") << "\n# *_sigma: one-sigma marginal uncertainties, "
+             << "sigma^2 (J^T J)^-1 at the optimum (docs/calibration.md)\n";
+  for (const auto& in : o.inputs) provenance << "# input: " << in << "\n";
+  write_atomically(res.rig, o.output, provenance.str());
   print_report(res, views, splits.get(), odd_even.get(), settings, {o.json, o.output});
 }
 
