@@ -1,0 +1,133 @@
+// "Where we differ from the paper, and why": the report's closing section, its numbers from this run.
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "naneye/recon/division_fit.hpp"
+#include "paper_tables.hpp"
+#include "study.hpp"
+
+namespace naneye::tools::study {
+namespace {
+
+std::string f(double v, int decimals = 2) {
+  char buf[48];
+  if (!std::isfinite(v)) return "-";
+  if (v != 0 && std::abs(v) < 1e-3)
+    std::snprintf(buf, sizeof buf, "%.2e", v);
+  else
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+double corner_rms(const Dataset& d) {
+  double sq = 0;
+  int n = 0;
+  for (const View& v : d.views) {
+    for (std::size_t i = 0; v.found && i < v.detected.size(); ++i) {
+      sq += (v.left_px[i] - v.truth_left[i]).squaredNorm() + (v.right_px[i] - v.truth_right[i]).squaredNorm();
+      n += 2;
+    }
+  }
+  return n ? std::sqrt(sq / n) : NAN;
+}
+
+double worst(const Dataset& d, Method m, double Scores::*field) {
+  double w = NAN;
+  for (const View& v : d.views) {
+    const double x = v.scores[static_cast<std::size_t>(m)].*field;
+    if (v.found && std::isfinite(x) && !(x <= w)) w = x;
+  }
+  return w;
+}
+
+}  // namespace
+
+std::string differences_section(const StudyRun& run) {
+  std::ostringstream o;
+  o << "## Where we differ from the paper, and why\n\n";
+  const Dataset* d3 = nullptr;
+  for (const Dataset& d : run.sets) {
+    if (d.preset.name == "paper-d3") d3 = &d;
+  }
+  if (!d3) return o.str();
+  const Scores& poly = d3->mean[poly_tri];
+  const Scores& dlt = d3->mean[poly_dlt];
+  const Scores& board = d3->mean[poly_board];
+  const Scores& div = d3->mean[div_tri];
+  const Scores& sweep = d3->mean[div_sweep];
+  const auto fit_l = recon::fit_division_to_camera(d3->rig.left, recon::DivisionVariant::image_centre, 4);
+  const auto fit_r = recon::fit_division_to_camera(d3->rig.right, recon::DivisionVariant::image_centre, 4);
+
+  o << "* **Renders, not photographs.** The paper measured real NanEye images of printed boards; we render "
+       "them with the paper's own Dataset 3 calibration as the *true* camera. So our polynomial model is "
+       "exact by construction and no calibration error enters the main tables (the paper's did; the "
+       "cross-validation section is where calibration error would show). What is left is corner noise: "
+       "naneye's detector measures the rendered corners to "
+    << f(corner_rms(*d3), 3)
+    << " px RMS on Dataset 3. The paper gives no corner accuracy; its baseline R of 0.08-0.31 px is of "
+       "the same order.\n";
+  o << "* **P and D of the baseline.** With that noise our polynomial triangulation gives P " << f(dlt.P)
+    << " mm, D " << f(dlt.D) << " mm (DLT, the paper's recipe) and P " << f(poly.P) << ", D " << f(poly.D)
+    << " mm (our refined triangulation), the same range as the paper's 1.8-5.7 mm and 0.15-5.8 mm: at 70 mm "
+       "a 1 mm baseline turns a pixel of disparity into ~21 mm of depth (paper Eq. 2), so P and D measure "
+       "the "
+       "corner noise through that lever, not the model. The paper's own conclusion (\"reconstruction with "
+       "higher accuracy requires ... jointly considering the radial distortion and the small baseline\") is "
+       "what the board-pose rows do: fitting the known board to both eyes brings the 3D error from "
+    << f(poly.E) << " mm (triangulated) to " << f(board.E, 3) << " mm.\n";
+  o << "* **Division model, lambda from homographies.** With a ~1 mm baseline the homography between the two "
+       "views of a board is close to the identity and a distortion common to both eyes cancels in it, so "
+       "lambda is weakly observable (docs/division-model.md): the homographies give lambda = "
+    << f(d3->lambdas_pixel.lambda_left) << " / " << f(d3->lambdas_pixel.lambda_right)
+    << " px^-2 where the least-squares fit of one parameter to the true cameras is " << f(fit_l.lambda)
+    << " / " << f(fit_r.lambda) << " px^-2, and even that best fit misses the polynomial by "
+    << f(fit_l.max_px, 1) << " / " << f(fit_r.max_px, 1)
+    << " px at the image edge (plot below). The paper saw the same weakness from the other side (\"the "
+       "division model with a single coefficient can not correctly model this level of distortion\"). Here "
+       "the division paths give E "
+    << f(div.E) << " mm (triangulation) against " << f(poly.E)
+    << " mm for the polynomial with the same corners.\n";
+  o << "* **Plane sweep = triangulation.** As in the paper (\"the plane-sweeping approach (as it was "
+       "applied) "
+       "is equivalent to triangulation\"): mean P / D / R "
+    << f(div.P) << " / " << f(div.D) << " / " << f(div.R, 3) << " against " << f(sweep.P) << " / "
+    << f(sweep.D) << " / " << f(sweep.R, 3) << ".\n";
+  o << "* **The paper's blow-ups.** Its Plane 5 with normalized coordinates reached P = 833.587 mm, "
+       "D = 1482 mm (and 26.6 / 42.8 mm directly with Eq. 10): a board reaching the image corners, where "
+       "one parameter no longer follows the lens. Our worst view gives P "
+    << f(worst(*d3, norm_tri, &Scores::P)) << " mm, D " << f(worst(*d3, norm_tri, &Scores::D))
+    << " mm (normalized + DLT) and P " << f(worst(*d3, norm_direct, &Scores::P)) << ", D "
+    << f(worst(*d3, norm_direct, &Scores::D))
+    << " mm (Eq. 10): our renders keep every corner inside both images and inside the model's fold (the "
+       "simulator's full-view poses), the paper's boards did not have to.\n";
+  if (!run.six.empty()) {
+    const SixPointResult& outer = run.six.back();
+    o << "* **The six-point comparison and its 57 px R.** The paper does not say where its six points were. "
+         "Near the axis the two eyes distort alike and the division model errs by micrometres; in the outer "
+         "field ("
+      << f(outer.offset_px, 0) << " px off-centre) D reaches " << f(outer.rows[div_tri].D)
+      << " mm, of the paper's 9.3 mm. Its R of 57-59 px is not reproduced: ours is "
+      << f(outer.rows[div_tri].R_own) << " px with the method's own model and "
+      << f(outer.rows[div_tri].R_true)
+      << " px against the true camera. An R of 57 px is a quarter of the image; it would need a reprojection "
+         "that mixes models (e.g. undistorted pinhole pixels compared with distorted ones); we do not know "
+         "what "
+         "the paper did. Its P of 0.006-0.008 mm (planar points, wrongly scaled) matches our placement near "
+         "the axis.\n";
+  }
+  o << "* **Centre of distortion.** The paper's image-centre variant assumes the distortion is centred at "
+       "(124.5, 124.5); the Dataset 3 left principal point lies "
+    << f((Eigen::Vector2d(d3->rig.left.cx(), d3->rig.left.cy()) - Eigen::Vector2d(124.5, 124.5)).norm(), 1)
+    << " px away. In our renders the principal point *is* the centre of distortion, so the normalized "
+       "variant is the better-centred one (its best fit misses by less, docs/division-model.md).\n";
+  o << "* **Which planes.** The paper shows 5 of its 19 images per table; we show the first 5 found views "
+       "and "
+       "the mean over all. They are not the same boards: compare ranges, not rows.\n";
+  o << "* **Datasets 1 and 2.** The paper reconstructs only with Dataset 3; the summary adds our figures "
+       "for the other two calibrations at their distances (20 and 50 mm), where depth from a 1 mm baseline "
+       "is far better conditioned (Eq. 2: the error grows with Z^2, see the depth plot).\n\n";
+  return o.str();
+}
+
+}  // namespace naneye::tools::study
