@@ -7,6 +7,7 @@
 #include <random>
 
 #include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/opencv_path.hpp"
 #include "naneye/recon/stereo_reconstructor.hpp"
 #include "naneye/sim/render.hpp"
 #include "study.hpp"
@@ -37,6 +38,32 @@ bool ids_reversed(const recon::PairResult& r, const std::vector<Eigen::Vector2d>
     reversed += (p.left_px - truth_left[static_cast<std::size_t>(n - 1 - p.id)]).norm();
   }
   return reversed < direct;
+}
+
+// The OpenCV user path on the same pair, its ids matched to the truth's the same way.
+void run_opencv(const Dataset& d, const cv::Mat& left, const cv::Mat& right, View& v) {
+  recon::OpenCvPathOptions o;
+  o.rows = d.board.rows;
+  o.cols = d.board.cols;
+  o.square_mm = d.board.square_mm;
+  const recon::OpenCvPathResult r = recon::opencv_reconstruct_pair(d.rig, view_of(left), view_of(right), o);
+  const std::size_t n = v.truth_left.size();
+  v.opencv_left.assign(n, Eigen::Vector2d::Constant(kNaN));
+  v.opencv_right = v.opencv_left;
+  if (!r.found || r.left_px.size() != n) return;
+  double direct = 0, reversed = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d p(r.left_px[i].x, r.left_px[i].y);
+    direct += (p - v.truth_left[i]).norm();
+    reversed += (p - v.truth_left[n - 1 - i]).norm();
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t id = reversed < direct ? n - 1 - i : i;
+    v.opencv_left[id] = {r.left_px[i].x, r.left_px[i].y};
+    v.opencv_right[id] = {r.right_px[i].x, r.right_px[i].y};
+    v.points[opencv][id] = r.xyz_mm[i];
+  }
+  v.opencv_found = true;
 }
 
 }  // namespace
@@ -91,6 +118,8 @@ Dataset render_dataset(const sim::Preset& preset, int views, std::uint64_t seed)
     } else {
       spdlog::warn("study: {} view {}: no board ({})", preset.name, k, recon::to_string(outcome));
     }
+    run_opencv(d, img.left, img.right, v);
+    d.opencv_found += v.opencv_found;
     d.views.push_back(std::move(v));
   }
   return d;

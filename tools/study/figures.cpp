@@ -53,7 +53,23 @@ Figure corner_error_figure(const std::vector<Dataset>& sets, double& rms) {
     f.series.push_back(std::move(cloud));
   }
   rms = n ? std::sqrt(sq / n) : NAN;
-  f.series.push_back(binned_mean(all, 10.0, "mean over 10 px bins (all datasets)", kBlack));
+  f.series.push_back(binned_mean(all, 10.0, "naneye's detector: mean over 10 px bins", kBlack));
+  // The OpenCV path's corners (findChessboardCorners + cornerSubPix) on the same renders.
+  Series ocv{"", kRed, {}, {}, false, 1};
+  for (const Dataset& d : sets) {
+    for (const View& v : d.views) {
+      for (std::size_t i = 0; v.opencv_found && i < v.opencv_left.size(); ++i) {
+        for (const bool left : {true, false}) {
+          const recon::CameraModel& cam = left ? d.rig.left : d.rig.right;
+          const Eigen::Vector2d& t = left ? v.truth_left[i] : v.truth_right[i];
+          ocv.x.push_back((t - Eigen::Vector2d(cam.cx(), cam.cy())).norm());
+          ocv.y.push_back(((left ? v.opencv_left[i] : v.opencv_right[i]) - t).norm());
+        }
+      }
+    }
+  }
+  if (!ocv.x.empty())
+    f.series.push_back(binned_mean(ocv, 10.0, "OpenCV path corners: mean over 10 px bins", kRed));
   return f;
 }
 
@@ -66,10 +82,10 @@ Figure depth_error_figure(const std::vector<Dataset>& sets, double corner_rms) {
            {},
            0.0,
            {}};
-  const Method methods[] = {div_tri, poly_tri, poly_board};
-  const cv::Scalar colours[] = {kRed, kBlue, kGreen};
+  const Method methods[] = {opencv, div_tri, poly_tri, poly_board};
+  const cv::Scalar colours[] = {kOrange, kRed, kBlue, kGreen};
   double zmax = 0;
-  for (std::size_t k = 0; k < 3; ++k) {
+  for (std::size_t k = 0; k < 4; ++k) {
     Series s{method_name(methods[k]), colours[k], {}, {}, false, 2};
     for (const Dataset& d : sets) {
       for (const View& v : d.views) {

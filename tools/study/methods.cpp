@@ -26,6 +26,8 @@ const char* method_name(Method m) {
       return "division, normalized + DLT";
     case norm_direct:
       return "division, normalized, Eq. 10 direct (one SVD)";
+    case opencv:
+      return "OpenCV path (findChessboardCorners + cornerSubPix, undistortPoints, triangulatePoints)";
     case kMethodCount:
       break;
   }
@@ -53,13 +55,16 @@ recon::DivisionLambdas estimate_lambdas(const Dataset& d, recon::DivisionVariant
   return recon::estimate_division_lambdas(planes);
 }
 
+// R against the pixels the method itself measured (the OpenCV path has its own corners).
 Scores score(const Dataset& d, const View& v, const std::vector<Eigen::Vector3d>& pts,
-             const recon::DivisionRig* div) {
+             const recon::DivisionRig* div, bool own_corners = false) {
   Scores s;
+  const auto& l = own_corners ? v.opencv_left : v.left_px;
+  const auto& r = own_corners ? v.opencv_right : v.right_px;
   s.P = recon::planarity_error(pts).value_or(NAN);
   s.D = recon::distance_error(pts, d.board.rows, d.board.cols, d.board.square_mm).value_or(NAN);
-  s.R = (div ? recon::division_reprojection_error(*div, pts, v.left_px, v.right_px)
-             : recon::reprojection_error(d.rig, pts, v.left_px, v.right_px))
+  s.R = (div ? recon::division_reprojection_error(*div, pts, l, r)
+             : recon::reprojection_error(d.rig, pts, l, r))
             .value_or(NAN);
   double sq = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -73,10 +78,11 @@ Scores score(const Dataset& d, const View& v, const std::vector<Eigen::Vector3d>
 
 }  // namespace
 
-void run_methods(Dataset& d) {
+void run_methods(Dataset& d, const Dataset* lambda_source) {
   d.mean = {};
-  d.lambdas_pixel = estimate_lambdas(d, recon::DivisionVariant::image_centre);
-  d.lambdas_normalized = estimate_lambdas(d, recon::DivisionVariant::normalized);
+  const Dataset& ls = lambda_source ? *lambda_source : d;
+  d.lambdas_pixel = estimate_lambdas(ls, recon::DivisionVariant::image_centre);
+  d.lambdas_normalized = estimate_lambdas(ls, recon::DivisionVariant::normalized);
   const recon::DivisionRig dp = recon::make_division_rig(
       d.rig, recon::DivisionVariant::image_centre, d.lambdas_pixel.lambda_left, d.lambdas_pixel.lambda_right);
   const recon::DivisionRig dn =
@@ -85,7 +91,21 @@ void run_methods(Dataset& d) {
   const std::size_t n = static_cast<std::size_t>(d.board.rows * d.board.cols);
   std::array<std::array<double, 4>, kMethodCount> sums{};
   std::array<std::array<int, 4>, kMethodCount> counts{};
+  const auto accumulate = [&](std::size_t m, const Scores& s) {
+    const std::array<double, 4> vals{s.P, s.D, s.R, s.E};
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (!std::isfinite(vals[k])) continue;
+      sums[m][k] += vals[k];
+      ++counts[m][k];
+    }
+    d.mean[m].valid += s.valid;
+  };
   for (View& v : d.views) {
+    // The OpenCV path is scored on every view it found, whether or not ours did.
+    if (v.opencv_found) {
+      v.scores[opencv] = score(d, v, v.points[opencv], nullptr, true);
+      accumulate(opencv, v.scores[opencv]);
+    }
     if (!v.found) continue;
     for (std::size_t i = 0; i < n; ++i) {
       if (v.detected[i])
@@ -100,18 +120,11 @@ void run_methods(Dataset& d) {
         recon::triangulate_undistorted(dn, v.left_px, v.right_px, recon::TriangulationMethod::dlt));
     v.points[norm_direct] =
         recon::triangulate_distorted(dn, v.left_px, v.right_px, recon::DirectSolve::one_svd).points;
-    for (int m = 0; m < kMethodCount; ++m) {
+    for (int m = 0; m < opencv; ++m) {
       const bool division = m >= div_tri;
       const recon::DivisionRig* rig = !division ? nullptr : (m == div_tri || m == div_sweep ? &dp : &dn);
       v.scores[static_cast<std::size_t>(m)] = score(d, v, v.points[static_cast<std::size_t>(m)], rig);
-      const Scores& s = v.scores[static_cast<std::size_t>(m)];
-      const std::array<double, 4> vals{s.P, s.D, s.R, s.E};
-      for (std::size_t k = 0; k < 4; ++k) {
-        if (!std::isfinite(vals[k])) continue;
-        sums[static_cast<std::size_t>(m)][k] += vals[k];
-        ++counts[static_cast<std::size_t>(m)][k];
-      }
-      d.mean[static_cast<std::size_t>(m)].valid += s.valid;
+      accumulate(static_cast<std::size_t>(m), v.scores[static_cast<std::size_t>(m)]);
     }
   }
   for (std::size_t m = 0; m < kMethodCount; ++m) {

@@ -26,6 +26,7 @@ StudyRun run_study(const StudyOptions& o) {
     if (d.preset.name != "paper-d3") continue;
     run.six = six_point_comparison(d);
     run.noisy.push_back(with_corner_noise(d, kClassicCornerSigmaPx, o.seed + 100));
+    run.cross_validation = cross_validation_section(run, d);
   }
   std::filesystem::create_directories(o.out_dir);
   run.figures = write_figures(run.sets, o.out_dir);

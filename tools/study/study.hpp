@@ -36,6 +36,7 @@ enum Method : int {
   div_sweep,    // the same lambdas, naive plane sweep (paper Table "division + plane-sweep")
   norm_tri,     // division model on normalized coordinates, undistort, DLT
   norm_direct,  // the same lambdas, Eq. 10 directly on distorted points, one SVD
+  opencv,       // the OpenCV user path (recon/opencv_path.hpp): its own corners, undistortPoints, DLT
   kMethodCount
 };
 const char* method_name(Method m);
@@ -54,6 +55,8 @@ struct View {
   std::vector<Eigen::Vector2d> left_px, right_px;                 // detected (truth order)
   std::vector<bool> detected;                                     // both eyes have the corner
   std::array<std::vector<Eigen::Vector3d>, kMethodCount> points;  // per method, NaN where refused
+  bool opencv_found = false;                                      // the OpenCV path found both grids
+  std::vector<Eigen::Vector2d> opencv_left, opencv_right;         // its corners (truth order)
   std::array<Scores, kMethodCount> scores;
 };
 
@@ -62,7 +65,7 @@ struct Dataset {
   recon::StereoRig rig;
   recon::BoardGeometry board;
   std::vector<View> views;
-  int found = 0;
+  int found = 0, opencv_found = 0;
   // lambda, lambda' from the plane homographies of the found views (paper Eq. 8-9), both variants.
   recon::DivisionLambdas lambdas_pixel, lambdas_normalized;
   std::array<Scores, kMethodCount> mean;  // over the found views
@@ -72,7 +75,11 @@ struct Dataset {
 // the daemon's detector (full search, no tracking).
 Dataset render_dataset(const sim::Preset& preset, int views, std::uint64_t seed);
 // Lambdas, every method on every found view, their scores and means.
-void run_methods(Dataset& d);
+// `lambda_source` (default: d itself) gives the views whose homographies fix the lambdas.
+void run_methods(Dataset& d, const Dataset* lambda_source = nullptr);
+// Our polynomial pipeline again on d's corners with d's rig: refined triangulation and board pose
+// (after the corners or the rig changed).
+void reconstruct_polynomial(Dataset& d, double corner_sigma_px);
 
 // A copy of `clean` whose detected corners get Gaussian noise of sigma_px (each coordinate), reconstructed
 // again by every method (lambdas re-estimated): what a classic corner detector would have given.
@@ -99,14 +106,16 @@ FigureFiles write_figures(const std::vector<Dataset>& sets, const std::filesyste
 struct StudyRun {
   StudyOptions options;
   std::vector<Dataset> sets;
-  std::vector<Dataset> noisy;  // Dataset 3 with kClassicCornerSigmaPx of corner noise (empty without it)
+  std::vector<Dataset> noisy;
+  std::string cross_validation;  // the section's markdown (computed with the run)  // Dataset 3 with
+                                 // kClassicCornerSigmaPx of corner noise (empty without it)
   std::vector<SixPointResult> six;
   FigureFiles figures;
   double seconds = 0;
 };
 void write_report(const StudyRun& run, const std::filesystem::path& file);
 // Sections of the report with their own files: the cross-validation tables and "where we differ".
-std::string cross_validation_section(const StudyRun& run);
+std::string cross_validation_section(const StudyRun& run, const Dataset& d3);
 std::string differences_section(const StudyRun& run);
 
 // Everything: render, reconstruct, plot, write out_dir/accuracy.md and out_dir/img/*.png.
