@@ -170,8 +170,9 @@ void write_report(const StudyRun& run, const std::filesystem::path& file) {
        "Regenerate this file and its plots (docs/img/) with one command, from a build of the repository:\n\n"
        "    build/tools/naneye study --preset paper --out-dir docs\n\n"
        "(deterministic: the same build and `--seed` give the same numbers; this run: seed "
-    << opt.seed << ", " << (opt.reduced ? "reduced" : "full") << " preset, " << num(run.seconds, 1)
-    << " s). The paper is Dias, Araujo, Miraldo, *3D Reconstruction with Low Resolution, Small Baseline and "
+    << opt.seed << ", " << (opt.reduced ? "reduced" : "full")
+    << " preset; the full preset takes about ten seconds on one core). The paper is Dias, Araujo, Miraldo, "
+       "*3D Reconstruction with Low Resolution, Small Baseline and "
        "High Radial Distortion Stereo Images*, ICDSC 2016 (`shared/paper/`).\n\n";
 
   o << "## Setup\n\n"

@@ -32,6 +32,7 @@ StudyRun run_study(const StudyOptions& o) {
   run.figures = write_figures(run.sets, o.out_dir);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_report(run, o.out_dir / "accuracy.md");
+  spdlog::info("study: done in {:.1f} s", run.seconds);
   return run;
 }
 
