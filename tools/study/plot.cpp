@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -43,18 +44,27 @@ struct Range {
   double lo, hi;
 };
 
+// x: the data's extent. y: from 0 (or below) to the 99th percentile of the dots, so that a few outliers
+// do not flatten the cloud, but high enough for every line (lines are summaries: they stay whole).
 Range data_range(const Figure& f, bool x_axis) {
   std::vector<double> v;
+  double line_max = -std::numeric_limits<double>::infinity();
   for (const auto& s : f.series) {
     for (const double d : x_axis ? s.x : s.y) {
-      if (std::isfinite(d)) v.push_back(d);
+      if (!std::isfinite(d)) continue;
+      if (s.line && !x_axis)
+        line_max = std::max(line_max, d);
+      else
+        v.push_back(d);
     }
   }
+  if (!x_axis && std::isfinite(line_max)) v.push_back(line_max);
   if (v.empty()) return {0, 1};
   std::sort(v.begin(), v.end());
   if (x_axis) return {v.front(), v.back()};
-  const double p99 = v[static_cast<std::size_t>(0.99 * static_cast<double>(v.size() - 1))];
-  return {std::min(0.0, v.front()), p99 > 0 ? p99 * 1.08 : 1.0};
+  double top = v[static_cast<std::size_t>(0.99 * static_cast<double>(v.size() - 1))];
+  if (std::isfinite(line_max)) top = std::max(top, line_max);
+  return {std::min(0.0, v.front()), top > 0 ? top * 1.08 : 1.0};
 }
 
 }  // namespace
