@@ -24,7 +24,8 @@ void add_study_commands(CLI::App& app) {
   cmd->add_option("--views", o->views, "Views per dataset (full preset)")
       ->check(CLI::Range(3, 200))
       ->capture_default_str();
-  cmd->callback([o, out] {
+  // The callback owns every variable CLI11 writes into (they must outlive parsing).
+  cmd->callback([o, out, preset] {
     o->out_dir = *out;
     const study::StudyRun run = study::run_study(*o);
     std::cout << (o->out_dir / "accuracy.md").string() << "\n";
