@@ -10,5 +10,6 @@ void add_devices_commands(CLI::App& app);
 void add_driver_commands(CLI::App& app);
 void add_sim_commands(CLI::App& app);
 void add_recon_commands(CLI::App& app);
+void add_study_commands(CLI::App& app);
 
 }  // namespace naneye::tools

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   naneye::tools::add_driver_commands(app);
   naneye::tools::add_sim_commands(app);
   naneye::tools::add_recon_commands(app);
+  naneye::tools::add_study_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
