@@ -1,0 +1,86 @@
+#pragma once
+// The full-search coarse grid of the corner detector (corners.hpp, docs/corners.md step 2): saddle
+// points of the luminance (Hessian determinant, non-maximum suppression, a ring test that keeps
+// only point-symmetric saddles), then a lattice grown over them in undistorted coordinates, where
+// a plane's corners form a projective grid with nearly uniform steps. Its output only seeds the
+// sub-pixel fit and the validation; it never decides alone that a board is there.
+//
+// Why our own instead of cv::findChessboardCorners: OpenCV's takes ~4 ms per eye here and
+// allocates on every call; this one works in buffers sized once and takes a small fraction of that.
+#include <complex>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "naneye/recon/camera.hpp"
+#include "naneye/recon/corners_refine.hpp"
+#include "naneye/recon/pair_result.hpp"
+
+namespace naneye::recon {
+
+struct CoarseGridSettings {
+  // Saddle map: a pixel is a candidate when -det(Hessian) is a 5x5 local maximum and at least this
+  // share of the frame's strongest (a square law: 0.01 keeps corners down to 1/10 of the strongest
+  // contrast, which covers vignetting and the side light).
+  float min_relative_response = 0.01f;
+  // Ring test on a circle of this radius (pixels) around the candidate: the second angular harmonic
+  // (four alternating quadrants) must exceed the first (an edge, an L-corner) by this ratio and
+  // have at least this amplitude (DN).
+  float ring_radius = 3.0f;
+  float min_harmonic_ratio = 1.2f;
+  float min_ring_amplitude_dn = 15.0f;
+  int max_candidates = 256;
+  // Lattice: a predicted neighbour is accepted within this share of the local step.
+  float lattice_tolerance = 0.3f;
+  int max_seeds = 12;
+};
+
+// One saddle candidate.
+struct SaddleCandidate {
+  Eigen::Vector2f px{0, 0};   // raw pixel, centres at integers
+  Eigen::Vector2f und{0, 0};  // undistorted, normalized * fx (pixel-sized units)
+  std::complex<float> phase;  // second angular harmonic: its sign flips between grid neighbours
+  float response = 0;         // -det(Hessian) at the maximum
+  bool usable = false;        // inside the camera model's domain
+};
+
+class CoarseGridFinder {
+ public:
+  CoarseGridFinder(int width, int height, const CoarseGridSettings& settings = {});
+
+  // Finds a rows x cols grid of saddles; on success writes rows * cols raw pixel positions to
+  // `out` row-major in a consistent grid order (mirror and 180-degree turn not yet fixed: see
+  // canonical_order). A grid larger than rows x cols in either direction, or one with holes, or
+  // only part of the board in view gives false. Allocates nothing.
+  bool find(const LumaView& img, const CameraModel& cam, int rows, int cols, Eigen::Vector2f* out);
+
+  // The candidates of the last find() (diagnostics, tests).
+  int candidate_count() const { return count_; }
+  const SaddleCandidate* candidates() const { return cand_.data(); }
+
+ private:
+  // The largest pattern kMaxCorners allows is 1 x 64: a lattice of this side covers any growth from a
+  // seed in its middle.
+  static constexpr int kMaxSide = 2 * kMaxCorners + 3;
+  static constexpr int kCandidateCapacity = 1024;
+
+  void saddle_map(const LumaView& img);
+  void collect_candidates(const LumaView& img);
+  bool ring_test(const LumaView& img, SaddleCandidate& c) const;
+  // 1: a complete grid written to out; 0: an incomplete component (try another seed); -1: more
+  // saddles than the pattern has (a larger board, or a false link): nothing is certain.
+  int grow(int seed, int rows, int cols, Eigen::Vector2f* out);
+  bool seed_square(int seed, int& a, int& b, int& d) const;
+  int nearest(const Eigen::Vector2f& at, float radius, int polarity_of, bool same_polarity) const;
+
+  CoarseGridSettings s_;
+  int width_, height_;
+  std::vector<float> tmp_, smooth_, resp_;
+  std::vector<SaddleCandidate> cand_;
+  std::vector<int> order_, cell_of_;  // usable candidates by response; growth that took each (-1: none)
+  std::vector<int> grid_;             // candidate per lattice cell (-1: empty), kSide x kSide
+  int count_ = 0;
+  int stamp_ = 0;  // id of the current growth, marks its candidates in cell_of_
+};
+
+}  // namespace naneye::recon
