@@ -1,0 +1,133 @@
+// The full-search coarse grid on its own (corners_coarse.hpp): every coarse corner near its true
+// corner, each true corner taken once, the pattern size configurable, and nothing for a board of
+// another size or a frame without a board.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "corner_test_util.hpp"
+#include "naneye/recon/corners_coarse.hpp"
+
+namespace naneye::recon {
+namespace {
+
+LumaView luma_of(const cv::Mat& m, bool bayer, std::vector<float>& luma, std::vector<float>& scratch) {
+  const RawImageView raw = test::view_of(m, bayer);
+  luma.resize(static_cast<std::size_t>(raw.width) * raw.height);
+  scratch.resize(luma.size());
+  raw_to_luminance(raw, luma.data(), scratch.data());
+  return {luma.data(),
+          raw.width,
+          raw.height,
+          raw.ignore_edge_rows,
+          raw.height - raw.ignore_edge_rows,
+          raw.width - raw.ignore_last_cols};
+}
+
+// Worst distance from a coarse corner to its nearest true corner; false when two coarse corners
+// share a true corner or neighbours in the grid are not neighbours on the board.
+bool check_grid(const std::vector<Eigen::Vector2f>& grid, int rows, int cols,
+                const std::vector<Eigen::Vector2d>& truth, int truth_cols, double& worst) {
+  worst = 0;
+  std::vector<int> id(grid.size());
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    double best = 1e9;
+    for (std::size_t t = 0; t < truth.size(); ++t) {
+      const double d = (grid[k].cast<double>() - truth[t]).norm();
+      if (d < best) {
+        best = d;
+        id[k] = static_cast<int>(t);
+      }
+    }
+    worst = std::max(worst, best);
+  }
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const int a = id[static_cast<std::size_t>(r * cols + c)];
+      for (int k = 0; k < r * cols + c; ++k) {
+        if (id[static_cast<std::size_t>(k)] == a) return false;
+      }
+      if (c + 1 < cols) {  // one step on the board, along a row or a column
+        const int b = id[static_cast<std::size_t>(r * cols + c + 1)];
+        const int dr = std::abs(a / truth_cols - b / truth_cols),
+                  dc = std::abs(a % truth_cols - b % truth_cols);
+        if (dr + dc != 1) return false;
+      }
+    }
+  }
+  return true;
+}
+
+TEST(CoarseGrid, FindsEveryCornerNearTheTruth) {
+  const StereoRig& rig = test::paper_d3();
+  CoarseGridFinder finder(250, 250);
+  std::vector<float> luma, scratch;
+  std::mt19937_64 rng(41);
+  int frames = 0, found = 0;
+  double worst_all = 0;
+  for (int k = 0; k < 6; ++k) {
+    const bool bayer = k % 2 == 1;
+    const sim::RenderedPair p =
+        test::render(bayer, test::random_pose(rng), 800 + static_cast<std::uint64_t>(k));
+    if (!test::fully_in_view(p.truth.left_px, p.truth.left_imaged)) continue;
+    ++frames;
+    std::vector<Eigen::Vector2f> grid(48);
+    if (!finder.find(luma_of(p.left, bayer, luma, scratch), rig.left, 6, 8, grid.data())) continue;
+    ++found;
+    double worst = 0;
+    EXPECT_TRUE(check_grid(grid, 6, 8, p.truth.left_px, 8, worst)) << "pose " << k;
+    worst_all = std::max(worst_all, worst);
+  }
+  std::printf("coarse grid: %d of %d frames, worst coarse corner %.3f px off\n", found, frames, worst_all);
+  EXPECT_GE(frames, 4);
+  EXPECT_EQ(found, frames);
+  // Within the first fit pass's 4 px window, with room to spare.
+  EXPECT_LT(worst_all, 1.0);
+}
+
+TEST(CoarseGrid, NoBoardNoGrid) {
+  const StereoRig& rig = test::paper_d3();
+  CoarseGridFinder finder(250, 250);
+  std::vector<float> luma, scratch;
+  for (int k = 0; k < 2; ++k) {
+    const bool bayer = k % 2 == 1;
+    const sim::RenderedPair p =
+        test::render(bayer, sim::Pose{}, 820 + static_cast<std::uint64_t>(k), test::Scene::no_board);
+    std::vector<Eigen::Vector2f> grid(48);
+    EXPECT_FALSE(finder.find(luma_of(p.left, bayer, luma, scratch), rig.left, 6, 8, grid.data()));
+  }
+}
+
+// The pattern is a setting: the 8 x 6 squares board (7 x 5 inner corners) is found as 5 x 7, while a
+// 5 x 7 pattern on the 9 x 7 squares board (more saddles than the pattern) is not.
+TEST(CoarseGrid, PatternSizeIsExact) {
+  const StereoRig& rig = test::paper_d3();
+  CornerSettings s;
+  s.rows = 5;
+  s.cols = 7;
+  CornerDetector det(rig.left, s);
+  std::mt19937_64 rng(43);
+  int in_view = 0, found_small = 0, found_large = 0;
+  for (int k = 0; k < 3; ++k) {
+    const sim::Pose pose = test::random_pose(rng);
+    const sim::RenderedPair small =
+        test::render(false, pose, 840 + static_cast<std::uint64_t>(k), test::Scene::small_board);
+    const sim::RenderedPair large = test::render(false, pose, 850 + static_cast<std::uint64_t>(k));
+    CornerResult res;
+    if (test::fully_in_view(small.truth.left_px, small.truth.left_imaged)) {
+      ++in_view;
+      if (det.detect_full(test::view_of(small.left, false), res)) {
+        ++found_small;
+        EXPECT_EQ(res.count, 35);
+        EXPECT_LT(test::max_error(res, small.truth.left_px, test::best_turn(res, small.truth.left_px)), 0.25);
+      }
+    }
+    found_large += det.detect_full(test::view_of(large.left, false), res);
+  }
+  EXPECT_GE(in_view, 2);
+  EXPECT_EQ(found_small, in_view);
+  EXPECT_EQ(found_large, 0);
+}
+
+}  // namespace
+}  // namespace naneye::recon
