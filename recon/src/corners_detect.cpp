@@ -76,7 +76,7 @@ CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& 
       settings_(settings),
       width_(camera.width()),
       height_(camera.height()),
-      coarse_finder_(camera.width(), camera.height(), settings.coarse) {
+      coarse_finder_(camera, settings.coarse) {
   luma_.resize(static_cast<std::size_t>(width_) * height_);
   scratch_.resize(luma_.size());
   coarse_.resize(kMaxCorners);
@@ -127,7 +127,7 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out) {
 
 bool CornerDetector::full_search(CornerResult& out) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  bool found = coarse_finder_.find(v, camera_, settings_.rows, settings_.cols, coarse_.data());
+  bool found = coarse_finder_.find(v, settings_.rows, settings_.cols, coarse_.data());
   if (!found && settings_.opencv_fallback) {
     found = coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_);
   }

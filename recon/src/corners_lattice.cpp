@@ -152,8 +152,7 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   return 1;
 }
 
-bool CoarseGridFinder::find(const LumaView& img, const CameraModel& cam, int rows, int cols,
-                            Eigen::Vector2f* out) {
+bool CoarseGridFinder::find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out) {
   count_ = 0;
   if (img.width != width_ || img.height != height_ || rows < 2 || cols < 2 || rows * cols > kMaxCorners) {
     return false;
@@ -163,10 +162,8 @@ bool CoarseGridFinder::find(const LumaView& img, const CameraModel& cam, int row
   int usable = 0;
   for (int i = 0; i < count_; ++i) {
     SaddleCandidate& c = cand_[static_cast<std::size_t>(i)];
-    const Undistorted u = cam.undistort(c.px.cast<double>());
-    c.usable = u.ok();
+    c.usable = undistort_px(c.px, c.und);
     if (c.usable) {
-      c.und = (u.normalized * cam.fx()).cast<float>();
       order_[static_cast<std::size_t>(usable++)] = i;
     }
     cell_of_[static_cast<std::size_t>(i)] = -1;

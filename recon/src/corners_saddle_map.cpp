@@ -27,9 +27,9 @@ float bilinear(const float* img, int width, float x, float y) {
 }
 }  // namespace
 
-CoarseGridFinder::CoarseGridFinder(int width, int height, const CoarseGridSettings& settings)
-    : s_(settings), width_(width), height_(height) {
-  const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+CoarseGridFinder::CoarseGridFinder(const CameraModel& cam, const CoarseGridSettings& settings)
+    : s_(settings), cam_(cam), width_(cam.width()), height_(cam.height()) {
+  const auto n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   tmp_.assign(n, 0.0f);
   smooth_.assign(n, 0.0f);
   resp_.assign(n, 0.0f);
@@ -37,47 +37,95 @@ CoarseGridFinder::CoarseGridFinder(int width, int height, const CoarseGridSettin
   order_.resize(kCandidateCapacity);
   cell_of_.resize(kCandidateCapacity);
   grid_.resize(static_cast<std::size_t>(kMaxSide) * kMaxSide);
+  lut_w_ = (width_ - 1 + kLutStep - 1) / kLutStep + 1;
+  lut_h_ = (height_ - 1 + kLutStep - 1) / kLutStep + 1;
+  lut_.resize(static_cast<std::size_t>(lut_w_) * lut_h_);
+  lut_ok_.assign(lut_.size(), 0);
+  std::vector<unsigned char> node_ok(lut_.size());
+  for (int j = 0; j < lut_h_; ++j) {
+    for (int i = 0; i < lut_w_; ++i) {
+      const auto k = static_cast<std::size_t>(j * lut_w_ + i);
+      const Undistorted u = cam.undistort(Eigen::Vector2d(i * kLutStep, j * kLutStep));
+      node_ok[k] = u.ok();
+      lut_[k] = Eigen::Vector2f::Zero();
+      if (u.ok()) lut_[k] = (u.normalized * cam.fx()).cast<float>();
+    }
+  }
+  // A cell is interpolated when its four nodes are in the domain and bilinear interpolation meets
+  // the exact inverse at the cell centre (where its error peaks) within kLutTolerancePx; the cells
+  // next to the fold, where the inverse's derivative grows without bound, use the exact inverse.
+  for (int j = 0; j + 1 < lut_h_; ++j) {
+    for (int i = 0; i + 1 < lut_w_; ++i) {
+      const auto k = static_cast<std::size_t>(j * lut_w_ + i), w = static_cast<std::size_t>(lut_w_);
+      if (!node_ok[k] || !node_ok[k + 1] || !node_ok[k + w] || !node_ok[k + w + 1]) continue;
+      const Undistorted c = cam.undistort(Eigen::Vector2d((i + 0.5) * kLutStep, (j + 0.5) * kLutStep));
+      if (!c.ok()) continue;
+      const Eigen::Vector2f mid = 0.25f * (lut_[k] + lut_[k + 1] + lut_[k + w] + lut_[k + w + 1]);
+      lut_ok_[k] = (mid - (c.normalized * cam.fx()).cast<float>()).norm() <= kLutTolerancePx;
+    }
+  }
+}
+
+bool CoarseGridFinder::undistort_px(const Eigen::Vector2f& px, Eigen::Vector2f& und) const {
+  const float x = px.x() / kLutStep, y = px.y() / kLutStep;
+  if (!(x >= 0 && y >= 0 && x <= static_cast<float>(lut_w_ - 1) && y <= static_cast<float>(lut_h_ - 1))) {
+    return false;
+  }
+  const int i = std::min(static_cast<int>(x), lut_w_ - 2), j = std::min(static_cast<int>(y), lut_h_ - 2);
+  const auto k = static_cast<std::size_t>(j * lut_w_ + i), w = static_cast<std::size_t>(lut_w_);
+  if (!lut_ok_[k]) {
+    const Undistorted u = cam_.undistort(px.cast<double>());
+    if (!u.ok()) return false;
+    und = (u.normalized * cam_.fx()).cast<float>();
+    return true;
+  }
+  const float fx = x - static_cast<float>(i), fy = y - static_cast<float>(j);
+  und = (lut_[k] * (1 - fx) + lut_[k + 1] * fx) * (1 - fy) +
+        (lut_[k + w] * (1 - fx) + lut_[k + w + 1] * fx) * fy;
+  return true;
 }
 
 void CoarseGridFinder::saddle_map(const LumaView& img) {
   // Binomial [1 4 6 4 1] / 16 (sigma = 1 px) in both directions, reads clamped to the usable area,
   // then -det(H) from central differences: a saddle has det < 0 at its centre, an edge det ~ 0.
+  // Rows as Eigen arrays: Eigen vectorises them explicitly (GCC does not at -O2) and maps of
+  // existing buffers allocate nothing.
+  using Row = Eigen::Map<Eigen::ArrayXf>;
+  using CRow = Eigen::Map<const Eigen::ArrayXf>;
   const int w = width_, rb = img.row_begin, re = img.row_end, ce = img.col_end;
   const float k0 = 6.0f / 16, k1 = 4.0f / 16, k2 = 1.0f / 16;
   for (int r = rb; r < re; ++r) {
     const float* in = img.data + r * w;
     float* o = tmp_.data() + r * w;
-    for (int c = 0; c < ce; ++c) {
-      if (c >= 2 && c + 2 < ce) {
-        o[c] = k0 * in[c] + k1 * (in[c - 1] + in[c + 1]) + k2 * (in[c - 2] + in[c + 2]);
-      } else {
-        auto at = [&](int cc) { return in[std::clamp(cc, 0, ce - 1)]; };
-        o[c] = k0 * at(c) + k1 * (at(c - 1) + at(c + 1)) + k2 * (at(c - 2) + at(c + 2));
-      }
+    const int n = ce - 4;
+    Row(o + 2, n) = k0 * CRow(in + 2, n) + k1 * (CRow(in + 1, n) + CRow(in + 3, n)) +
+                    k2 * (CRow(in, n) + CRow(in + 4, n));
+    for (int c : {0, 1, ce - 2, ce - 1}) {
+      auto at = [&](int cc) { return in[std::clamp(cc, 0, ce - 1)]; };
+      o[c] = k0 * at(c) + k1 * (at(c - 1) + at(c + 1)) + k2 * (at(c - 2) + at(c + 2));
     }
   }
   for (int r = rb; r < re; ++r) {
-    const float* m2 = tmp_.data() + std::max(r - 2, rb) * w;
-    const float* m1 = tmp_.data() + std::max(r - 1, rb) * w;
-    const float* m0 = tmp_.data() + r * w;
-    const float* p1 = tmp_.data() + std::min(r + 1, re - 1) * w;
-    const float* p2 = tmp_.data() + std::min(r + 2, re - 1) * w;
-    float* o = smooth_.data() + r * w;
-    for (int c = 0; c < ce; ++c) o[c] = k0 * m0[c] + k1 * (m1[c] + p1[c]) + k2 * (m2[c] + p2[c]);
+    auto row = [&](int rr) { return CRow(tmp_.data() + std::clamp(rr, rb, re - 1) * w, ce); };
+    Row(smooth_.data() + r * w, ce) =
+        k0 * row(r) + k1 * (row(r - 1) + row(r + 1)) + k2 * (row(r - 2) + row(r + 2));
   }
-  std::fill(resp_.begin(), resp_.end(), 0.0f);
+  // collect_candidates reads the response up to the usable area's border: the border rows and
+  // columns, where there is no central difference, are zero.
+  std::fill(resp_.begin() + rb * w, resp_.begin() + (rb + 1) * w, 0.0f);
+  std::fill(resp_.begin() + (re - 1) * w, resp_.begin() + re * w, 0.0f);
+  float peak = 0;
   for (int r = rb + 1; r + 1 < re; ++r) {
-    const float* a = smooth_.data() + (r - 1) * w;
-    const float* m = smooth_.data() + r * w;
-    const float* b = smooth_.data() + (r + 1) * w;
-    float* o = resp_.data() + r * w;
-    for (int c = 1; c + 1 < ce; ++c) {
-      const float ixx = m[c - 1] - 2 * m[c] + m[c + 1];
-      const float iyy = a[c] - 2 * m[c] + b[c];
-      const float ixy = 0.25f * (b[c + 1] - b[c - 1] - a[c + 1] + a[c - 1]);
-      o[c] = ixy * ixy - ixx * iyy;
-    }
+    const int n = ce - 2;
+    auto at = [&](int dr, int dc) { return CRow(smooth_.data() + (r + dr) * w + 1 + dc, n); };
+    Row resp(resp_.data() + r * w + 1, n);
+    resp = (0.25f * (at(1, 1) - at(1, -1) - at(-1, 1) + at(-1, -1))).square() -
+           (at(0, -1) - 2 * at(0, 0) + at(0, 1)) * (at(-1, 0) - 2 * at(0, 0) + at(1, 0));
+    resp_[static_cast<std::size_t>(r * w)] = 0;
+    resp_[static_cast<std::size_t>(r * w + ce - 1)] = 0;
+    peak = std::max(peak, resp.maxCoeff());
   }
+  peak_ = peak;
 }
 
 bool CoarseGridFinder::ring_test(const LumaView& img, SaddleCandidate& c) const {
@@ -106,13 +154,10 @@ bool CoarseGridFinder::ring_test(const LumaView& img, SaddleCandidate& c) const 
 
 void CoarseGridFinder::collect_candidates(const LumaView& img) {
   const int w = width_;
-  float peak = 0;
-  for (int r = img.row_begin; r < img.row_end; ++r) {
-    for (int c = 0; c < img.col_end; ++c) peak = std::max(peak, resp_[static_cast<std::size_t>(r * w + c)]);
-  }
   count_ = 0;
-  if (!(peak > 0)) return;
-  const float threshold = s_.min_relative_response * peak;
+  constexpr float kPi = 3.14159265f;
+  const float floor = s_.min_saddle_contrast_dn / (2.0f * kPi);
+  const float threshold = std::max(s_.min_relative_response * peak_, floor * floor);
   for (int r = img.row_begin + 2; r + 2 < img.row_end; ++r) {
     for (int c = 2; c + 2 < img.col_end; ++c) {
       const float* p = resp_.data() + r * w + c;

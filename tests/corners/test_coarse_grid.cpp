@@ -60,7 +60,7 @@ bool check_grid(const std::vector<Eigen::Vector2f>& grid, int rows, int cols,
 
 TEST(CoarseGrid, FindsEveryCornerNearTheTruth) {
   const StereoRig& rig = test::paper_d3();
-  CoarseGridFinder finder(250, 250);
+  CoarseGridFinder finder(rig.left);
   std::vector<float> luma, scratch;
   std::mt19937_64 rng(41);
   int frames = 0, found = 0;
@@ -72,8 +72,9 @@ TEST(CoarseGrid, FindsEveryCornerNearTheTruth) {
     if (!test::fully_in_view(p.truth.left_px, p.truth.left_imaged)) continue;
     ++frames;
     std::vector<Eigen::Vector2f> grid(48);
-    if (!finder.find(luma_of(p.left, bayer, luma, scratch), rig.left, 6, 8, grid.data())) continue;
+    if (!finder.find(luma_of(p.left, bayer, luma, scratch), 6, 8, grid.data())) continue;
     ++found;
+    std::printf("pose %d: %d saddle candidates\n", k, finder.candidate_count());
     double worst = 0;
     EXPECT_TRUE(check_grid(grid, 6, 8, p.truth.left_px, 8, worst)) << "pose " << k;
     worst_all = std::max(worst_all, worst);
@@ -87,14 +88,15 @@ TEST(CoarseGrid, FindsEveryCornerNearTheTruth) {
 
 TEST(CoarseGrid, NoBoardNoGrid) {
   const StereoRig& rig = test::paper_d3();
-  CoarseGridFinder finder(250, 250);
+  CoarseGridFinder finder(rig.left);
   std::vector<float> luma, scratch;
   for (int k = 0; k < 2; ++k) {
     const bool bayer = k % 2 == 1;
     const sim::RenderedPair p =
         test::render(bayer, sim::Pose{}, 820 + static_cast<std::uint64_t>(k), test::Scene::no_board);
     std::vector<Eigen::Vector2f> grid(48);
-    EXPECT_FALSE(finder.find(luma_of(p.left, bayer, luma, scratch), rig.left, 6, 8, grid.data()));
+    EXPECT_FALSE(finder.find(luma_of(p.left, bayer, luma, scratch), 6, 8, grid.data()));
+    std::printf("no board (%s): %d saddle candidates\n", bayer ? "bayer" : "mono", finder.candidate_count());
   }
 }
 
@@ -127,6 +129,39 @@ TEST(CoarseGrid, PatternSizeIsExact) {
   EXPECT_GE(in_view, 2);
   EXPECT_EQ(found_small, in_view);
   EXPECT_EQ(found_large, 0);
+}
+
+}  // namespace
+}  // namespace naneye::recon
+
+namespace naneye::recon {
+namespace {
+
+// The lattice's tabulated undistortion against the exact inverse, for both eyes: never a number
+// beyond the fold, and far inside the lattice's tolerance (0.3 of a ~10-20 px step) where it has one.
+TEST(CoarseGrid, TabulatedUndistortionMatchesTheExactOne) {
+  for (const CameraModel* cam : {&test::paper_d3().left, &test::paper_d3().right}) {
+    const CoarseGridFinder finder(*cam);
+    double worst = 0;
+    int tabulated = 0, exact_only = 0, beyond_fold_numbers = 0;
+    for (double y = 0.3; y < 249; y += 1.7) {
+      for (double x = 0.2; x < 249; x += 1.3) {
+        const Undistorted u = cam->undistort({x, y});
+        Eigen::Vector2f t;
+        const bool ok = finder.undistort_px(Eigen::Vector2f(static_cast<float>(x), static_cast<float>(y)), t);
+        if (ok && !u.ok()) ++beyond_fold_numbers;
+        if (!ok && u.ok()) ++exact_only;
+        if (!ok || !u.ok()) continue;
+        ++tabulated;
+        worst = std::max(worst, (t.cast<double>() - u.normalized * cam->fx()).norm());
+      }
+    }
+    std::printf("tabulated undistortion: %d points, worst %.4f px off the exact inverse\n", tabulated, worst);
+    EXPECT_EQ(beyond_fold_numbers, 0);
+    EXPECT_GT(tabulated, 20000);
+    EXPECT_EQ(exact_only, 0);
+    EXPECT_LT(worst, 0.05);
+  }
 }
 
 }  // namespace

@@ -23,6 +23,11 @@ struct CoarseGridSettings {
   // share of the frame's strongest (a square law: 0.01 keeps corners down to 1/10 of the strongest
   // contrast, which covers vignetting and the side light).
   float min_relative_response = 0.01f;
+  // ... and at least the response of a saddle of this contrast (white - black, DN) under a blur of
+  // sigma 1 px: -det(H) = (C / (pi sigma_t^2))^2 at its centre, sigma_t^2 = 1 + 1 with our smoothing.
+  // Without a board the strongest noise saddle is ~4 (DN / px^2)^2, this floor ~40 and the weakest
+  // board corner of bench_corners ~600: a frame without a board stops here, before any ring test.
+  float min_saddle_contrast_dn = 40.0f;
   // Ring test on a circle of this radius (pixels) around the candidate: the second angular harmonic
   // (four alternating quadrants) must exceed the first (an edge, an L-corner) by this ratio and
   // have at least this amplitude (DN).
@@ -46,13 +51,19 @@ struct SaddleCandidate {
 
 class CoarseGridFinder {
  public:
-  CoarseGridFinder(int width, int height, const CoarseGridSettings& settings = {});
+  // Tabulates the camera's undistortion (every kLutStep pixels) once; the image size is the camera's.
+  explicit CoarseGridFinder(const CameraModel& cam, const CoarseGridSettings& settings = {});
 
   // Finds a rows x cols grid of saddles; on success writes rows * cols raw pixel positions to
   // `out` row-major in a consistent grid order (mirror and 180-degree turn not yet fixed: see
   // canonical_order). A grid larger than rows x cols in either direction, or one with holes, or
   // only part of the board in view gives false. Allocates nothing.
-  bool find(const LumaView& img, const CameraModel& cam, int rows, int cols, Eigen::Vector2f* out);
+  bool find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out);
+
+  // The lattice's undistortion: raw pixel -> normalized * fx, bilinear in a table of the exact
+  // CameraModel::undistort where that is within kLutTolerancePx of it, else the exact inverse (next
+  // to the fold). False beyond the model's fold or outside the image.
+  bool undistort_px(const Eigen::Vector2f& px, Eigen::Vector2f& und) const;
 
   // The candidates of the last find() (diagnostics, tests).
   int candidate_count() const { return count_; }
@@ -63,6 +74,8 @@ class CoarseGridFinder {
   // seed in its middle.
   static constexpr int kMaxSide = 2 * kMaxCorners + 3;
   static constexpr int kCandidateCapacity = 1024;
+  static constexpr int kLutStep = 4;
+  static constexpr float kLutTolerancePx = 0.02f;
 
   void saddle_map(const LumaView& img);
   void collect_candidates(const LumaView& img);
@@ -74,12 +87,17 @@ class CoarseGridFinder {
   int nearest(const Eigen::Vector2f& at, float radius, int polarity_of, bool same_polarity) const;
 
   CoarseGridSettings s_;
+  CameraModel cam_;
   int width_, height_;
+  int lut_w_ = 0, lut_h_ = 0;
+  std::vector<Eigen::Vector2f> lut_;   // undistorted (normalized * fx) at every kLutStep-th pixel
+  std::vector<unsigned char> lut_ok_;  // per cell (its top-left node): interpolate, else exact
   std::vector<float> tmp_, smooth_, resp_;
   std::vector<SaddleCandidate> cand_;
   std::vector<int> order_, cell_of_;  // usable candidates by response; growth that took each (-1: none)
   std::vector<int> grid_;             // candidate per lattice cell (-1: empty), kSide x kSide
   int count_ = 0;
+  float peak_ = 0;  // the strongest response of the last saddle_map
   int stamp_ = 0;  // id of the current growth, marks its candidates in cell_of_
 };
 
