@@ -12,6 +12,8 @@
 namespace naneye::recon {
 
 namespace {
+// Cells a component may hold beyond the pattern's (false links, left out).
+constexpr int kMaxStrayCells = 2;
 constexpr std::array<std::array<int, 2>, 4> kDirs = {{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
 
 // Grid neighbours alternate polarity: their second harmonics point in opposite directions.
@@ -82,9 +84,9 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   int a = -1, b = -1, d = -1;
   if (!seed_square(seed, a, b, d)) return 0;
   const int side = 2 * std::max(rows, cols) + 3, o = side / 2;
-  const int limit = rows * cols;
+  const int limit = rows * cols + kMaxStrayCells;
   std::fill(grid_.begin(), grid_.begin() + side * side, -1);
-  std::array<std::array<int, 2>, kMaxCorners> cells{};
+  std::array<std::array<int, 2>, kMaxCorners + kMaxStrayCells> cells{};
   int n = 0;
   ++stamp_;
   auto put = [&](int i, int j, int c) {
@@ -127,7 +129,7 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
         }
         const int c = nearest(p + step, s_.lattice_tolerance * step.norm(), here, false);
         if (c < 0 || cell_of_[static_cast<std::size_t>(c)] == stamp_) continue;
-        if (n == limit) return -1;  // more saddles than the pattern has: another board, or a false link
+        if (n == limit) return -1;  // more saddles than the pattern has: a larger board
         put(ti, tj, c);
         changed = true;
       }
@@ -140,14 +142,40 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
     j0 = std::min(j0, cells[static_cast<std::size_t>(k)][1]);
     j1 = std::max(j1, cells[static_cast<std::size_t>(k)][1]);
   }
-  const int w = i1 - i0 + 1, h = j1 - j0 + 1;
-  const bool fits = (w <= cols && h <= rows) || (w <= rows && h <= cols);
-  if (!fits || n != limit || w * h != n) return 0;  // part of a board (cut by the edge, or a saddle missed)
-  const bool i_is_col = w == cols && h == rows;
-  for (int k = 0; k < n; ++k) {
-    const int i = cells[static_cast<std::size_t>(k)][0] - i0, j = cells[static_cast<std::size_t>(k)][1] - j0;
-    const int idx = i_is_col ? j * cols + i : i * cols + j;
-    out[idx] = cand_[static_cast<std::size_t>(at(i + i0, j + j0))].px;
+  // The pattern must sit in the component at exactly one place (either way round): two places means
+  // a larger board (nothing is certain), none means part of a board (cut by the edge, or a saddle
+  // missed). A few cells beyond it are false links (the border squares' outer corners under strong
+  // distortion can pass the ring test) and are left out.
+  int placements = 0, pi = 0, pj = 0;
+  bool p_i_is_col = true;
+  for (int orient = 0; orient < (rows == cols ? 1 : 2); ++orient) {
+    const int w = orient == 0 ? cols : rows, h = orient == 0 ? rows : cols;
+    for (int j = j0; j + h - 1 <= j1; ++j) {
+      for (int i = i0; i + w - 1 <= i1; ++i) {
+        bool complete = true;
+        for (int jj = j; jj < j + h && complete; ++jj) {
+          for (int ii = i; ii < i + w; ++ii) {
+            if (at(ii, jj) < 0) {
+              complete = false;
+              break;
+            }
+          }
+        }
+        if (!complete) continue;
+        ++placements;
+        pi = i;
+        pj = j;
+        p_i_is_col = orient == 0;
+      }
+    }
+  }
+  if (placements > 1) return -1;
+  if (placements == 0) return 0;
+  for (int j = 0; j < (p_i_is_col ? rows : cols); ++j) {
+    for (int i = 0; i < (p_i_is_col ? cols : rows); ++i) {
+      const int idx = p_i_is_col ? j * cols + i : i * cols + j;
+      out[idx] = cand_[static_cast<std::size_t>(at(pi + i, pj + j))].px;
+    }
   }
   return 1;
 }

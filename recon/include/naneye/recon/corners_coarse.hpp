@@ -56,8 +56,8 @@ class CoarseGridFinder {
 
   // Finds a rows x cols grid of saddles; on success writes rows * cols raw pixel positions to
   // `out` row-major in a consistent grid order (mirror and 180-degree turn not yet fixed: see
-  // canonical_order). A grid larger than rows x cols in either direction, or one with holes, or
-  // only part of the board in view gives false. Allocates nothing.
+  // canonical_order). The pattern must fit the grown lattice at exactly one place: a larger board,
+  // a grid with holes, or only part of the board in view gives false. Allocates nothing.
   bool find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out);
 
   // The lattice's undistortion: raw pixel -> normalized * fx, bilinear in a table of the exact
@@ -80,8 +80,9 @@ class CoarseGridFinder {
   void saddle_map(const LumaView& img);
   void collect_candidates(const LumaView& img);
   bool ring_test(const LumaView& img, SaddleCandidate& c) const;
-  // 1: a complete grid written to out; 0: an incomplete component (try another seed); -1: more
-  // saddles than the pattern has (a larger board, or a false link): nothing is certain.
+  // 1: the pattern found at one place in the component and written to out; 0: no complete
+  // placement (try another seed); -1: two placements or more saddles than the pattern has plus a
+  // few false links (a larger board): nothing is certain.
   int grow(int seed, int rows, int cols, Eigen::Vector2f* out);
   bool seed_square(int seed, int& a, int& b, int& d) const;
   int nearest(const Eigen::Vector2f& at, float radius, int polarity_of, bool same_polarity) const;
@@ -98,7 +99,7 @@ class CoarseGridFinder {
   std::vector<int> grid_;             // candidate per lattice cell (-1: empty), kSide x kSide
   int count_ = 0;
   float peak_ = 0;  // the strongest response of the last saddle_map
-  int stamp_ = 0;  // id of the current growth, marks its candidates in cell_of_
+  int stamp_ = 0;   // id of the current growth, marks its candidates in cell_of_
 };
 
 }  // namespace naneye::recon
