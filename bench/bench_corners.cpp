@@ -12,6 +12,8 @@
 
 #include "../tests/corners/corner_test_util.hpp"
 #include "naneye/recon/corners.hpp"
+#include "naneye/recon/corners_coarse.hpp"
+#include "naneye/recon/corners_grid.hpp"
 
 namespace {
 
@@ -143,6 +145,59 @@ void BM_OpenCV(benchmark::State& state, bool sb) {
   tally.report(state);
 }
 
+// The full search's coarse grid step alone, on the luminance the detector computes: ours (saddle
+// lattice, corners_coarse.hpp) against the OpenCV search the detector used before (and keeps as an
+// opt-in fallback). Counter: pairs whose both eyes gave a grid.
+void BM_CoarseGrid(benchmark::State& state, bool opencv) {
+  const auto& eyes = dataset();
+  const recon::StereoRig& rig = test::paper_d3();
+  std::vector<std::vector<float>> lumas(eyes.size());
+  std::vector<float> scratch(250 * 250);
+  for (std::size_t i = 0; i < eyes.size(); ++i) {
+    lumas[i].resize(250 * 250);
+    recon::raw_to_luminance(test::view_of(eyes[i].now, eyes[i].bayer), lumas[i].data(), scratch.data());
+  }
+  recon::CoarseGridFinder left(rig.left), right(rig.right);
+  std::vector<unsigned char> gray8;
+  std::vector<Eigen::Vector2f> grid(recon::kMaxCorners);
+  std::vector<bool> found(eyes.size());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const recon::LumaView v{lumas[i].data(), 250, 250, 1, 249, 249};
+    recon::CoarseGridFinder& finder = eyes[i].left ? left : right;
+    found[i] = opencv ? recon::coarse_grid_opencv(v, 6, 8, gray8, grid) : finder.find(v, 6, 8, grid.data());
+    benchmark::DoNotOptimize(grid.data());
+    i = (i + 1) % eyes.size();
+  }
+  int pairs = 0;
+  for (std::size_t k = 0; k + 1 < found.size(); k += 2) pairs += found[k] && found[k + 1];
+  state.counters["pairs_found"] = pairs;
+}
+
+// What the daemon pays on every frame without a board: a full search that finds nothing (the
+// luminance included). With the OpenCV fallback on, this is what every such frame cost before.
+void BM_NoBoard(benchmark::State& state, bool opencv_fallback) {
+  const recon::StereoRig& rig = test::paper_d3();
+  std::vector<std::pair<cv::Mat, bool>> frames;
+  for (int k = 0; k < 8; ++k) {
+    const bool bayer = k % 2 == 1;
+    frames.emplace_back(
+        test::render(bayer, sim::Pose{}, 9900 + static_cast<std::uint64_t>(k), test::Scene::no_board).left,
+        bayer);
+  }
+  recon::CornerSettings settings;
+  settings.opencv_fallback = opencv_fallback;
+  recon::CornerDetector det(rig.left, settings);
+  recon::CornerResult res;
+  std::size_t i = 0;
+  int found = 0;
+  for (auto _ : state) {
+    found += det.detect_full(test::view_of(frames[i].first, frames[i].second), res);
+    i = (i + 1) % frames.size();
+  }
+  state.counters["found"] = found;
+}
+
 // Each run covers the 48 eyes at least once (the tallies need all of them).
 BENCHMARK_CAPTURE(BM_Ours, full_search, false)->Unit(benchmark::kMillisecond)->Iterations(96);
 BENCHMARK_CAPTURE(BM_Ours, tracked, true)->Unit(benchmark::kMillisecond)->Iterations(480);
@@ -150,6 +205,10 @@ BENCHMARK_CAPTURE(BM_OpenCV, findChessboardCorners_cornerSubPix, false)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(96);
 BENCHMARK_CAPTURE(BM_OpenCV, findChessboardCornersSB, true)->Unit(benchmark::kMillisecond)->Iterations(96);
+BENCHMARK_CAPTURE(BM_CoarseGrid, ours, false)->Unit(benchmark::kMillisecond)->Iterations(480);
+BENCHMARK_CAPTURE(BM_CoarseGrid, opencv_before, true)->Unit(benchmark::kMillisecond)->Iterations(96);
+BENCHMARK_CAPTURE(BM_NoBoard, ours, false)->Unit(benchmark::kMillisecond)->Iterations(400);
+BENCHMARK_CAPTURE(BM_NoBoard, with_opencv_fallback, true)->Unit(benchmark::kMillisecond)->Iterations(80);
 
 }  // namespace
 

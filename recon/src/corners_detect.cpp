@@ -72,11 +72,14 @@ void canonical_order(CornerResult& r) {
 }
 
 CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& settings)
-    : camera_(camera), settings_(settings), width_(camera.width()), height_(camera.height()) {
+    : camera_(camera),
+      settings_(settings),
+      width_(camera.width()),
+      height_(camera.height()),
+      coarse_finder_(camera, settings.coarse) {
   luma_.resize(static_cast<std::size_t>(width_) * height_);
   scratch_.resize(luma_.size());
-  gray8_.resize(luma_.size());
-  coarse_.reserve(kMaxCorners);
+  coarse_.resize(kMaxCorners);
 }
 
 bool CornerDetector::detect(const RawImageView& image, const CornerResult* previous, CornerResult& out) {
@@ -124,7 +127,11 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out) {
 
 bool CornerDetector::full_search(CornerResult& out) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  if (!coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_)) {
+  bool found = coarse_finder_.find(v, settings_.rows, settings_.cols, coarse_.data());
+  if (!found && settings_.opencv_fallback) {
+    found = coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_);
+  }
+  if (!found) {
     failure_ = CornerFailure::no_grid;
     return false;
   }

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "naneye/recon/camera.hpp"
+#include "naneye/recon/corners_coarse.hpp"
 #include "naneye/recon/corners_refine.hpp"
 #include "naneye/recon/pair_result.hpp"
 
@@ -87,6 +88,11 @@ struct CornerSettings {
   double max_homography_rms_px = 0.5, max_homography_worst_px = 1.5;
   // Tracking: accept the tracked grid when every corner moved less than this from the previous one.
   double max_track_motion_px = 4.0;
+  // Full search: our saddle lattice (corners_coarse.hpp). OpenCV's findChessboardCorners (then
+  // findChessboardCornersSB) only when ours finds no grid and this is on: it costs ~4 ms per eye and
+  // allocates on every call, and ours finds every board the benchmark and tests render.
+  CoarseGridSettings coarse;
+  bool opencv_fallback = false;
 };
 
 class CornerDetector {
@@ -95,7 +101,7 @@ class CornerDetector {
 
   // Detects the board in `image`. With `previous` found, first tracks from it (fit windows around the
   // previous corners) and falls back to a full search when tracking fails validation.
-  // Returns out.found. Allocates nothing once warmed up, except inside the OpenCV full search.
+  // Returns out.found. Allocates nothing once warmed up (except inside the optional OpenCV fallback).
   bool detect(const RawImageView& image, const CornerResult* previous, CornerResult& out);
   // Full search only (no tracking).
   bool detect_full(const RawImageView& image, CornerResult& out) { return detect(image, nullptr, out); }
@@ -123,6 +129,7 @@ class CornerDetector {
   std::vector<float> luma_, scratch_;
   std::vector<unsigned char> gray8_;
   std::vector<Eigen::Vector2f> coarse_;
+  CoarseGridFinder coarse_finder_;
 };
 
 // The luminance of a raw frame, without moving any edge: mono is copied; GRBG Bayer is filtered
