@@ -77,6 +77,8 @@ CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& 
   scratch_.resize(luma_.size());
   gray8_.resize(luma_.size());
   coarse_.reserve(kMaxCorners);
+  map_ = std::make_shared<const UndistortMap>(camera_);
+  work_.resize(1);
 }
 
 bool CornerDetector::detect(const RawImageView& image, const CornerResult* previous, CornerResult& out) {
@@ -163,10 +165,14 @@ double CornerDetector::fit_radius(double spacing) const {
   return std::clamp(settings_.window_fraction * spacing, settings_.min_radius, settings_.max_radius);
 }
 
-bool CornerDetector::fit_corner(const SaddleInit& init, double radius, double tolerance_px, SaddleFit& fit,
-                                std::uint8_t& flags) {
+bool CornerDetector::fit_corner(const SaddleInit& init, const EdgeDirections* edges, double radius,
+                                double tolerance_px, SaddleFit& fit, std::uint8_t& flags) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  bool ok = fit_saddle(v, camera_, init, radius, 50, fit, tolerance_px);
+  FastFitScratch& w = work_.front();
+  auto run = [&](const SaddleInit& s, double rad, SaddleFit& f) {
+    return fit_saddle_fast(v, camera_, *map_, s, edges, rad, 50, tolerance_px, w, f);
+  };
+  bool ok = run(init, radius, fit);
   while (!ok && radius > settings_.min_radius) {
     const int half = static_cast<int>(std::ceil(radius)) + 1;
     const int cx = static_cast<int>(std::lround(init.px.x())),
@@ -176,7 +182,7 @@ bool CornerDetector::fit_corner(const SaddleInit& init, double radius, double to
     if (!at_edge) break;
     radius = std::max(radius - 1.0, settings_.min_radius);
     flags |= kCornerNearEdge;
-    ok = fit_saddle(v, camera_, init, radius, 50, fit, tolerance_px);
+    ok = run(init, radius, fit);
   }
   // A start far from the optimum can let the blur collapse (the erf turns into a step and its
   // gradient vanishes): retry once from a wide blur before giving up on the corner.
@@ -185,12 +191,39 @@ bool CornerDetector::fit_corner(const SaddleInit& init, double radius, double to
     SaddleInit wide = init;
     wide.sigma = 1.2;
     SaddleFit retry;
-    if (fit_saddle(v, camera_, wide, radius, 50, retry, tolerance_px) && (!ok || retry.rms < fit.rms)) {
+    if (run(wide, radius, retry) && (!ok || retry.rms < fit.rms)) {
       fit = retry;
       ok = true;
     }
   }
   return ok;
+}
+
+void CornerDetector::grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols) {
+  // The board's edges through a corner are the grid lines through its neighbours, straight on the
+  // undistorted plane: their directions come from the grid itself, more precisely than a 7 px
+  // window can fit them (a 0.02 px corner error over two spacings is ~1e-3 rad).
+  std::array<Eigen::Vector2d, kMaxCorners> xn;
+  std::array<bool, kMaxCorners> ok{};
+  for (int i = 0; i < rows * cols; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const Undistorted u = camera_.undistort(px[k]);
+    ok[k] = u.ok();
+    xn[k] = u.normalized;
+  }
+  auto at = [&](int r, int c) { return static_cast<std::size_t>(r * cols + c); };
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, cols - 1);
+      const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, rows - 1);
+      EdgeDirections& e = edges_[at(r, c)];
+      e.row_px = px[at(r, c1)] - px[at(r, c0)];
+      e.col_px = px[at(r1, c)] - px[at(r0, c)];
+      e.normalized_ok = ok[at(r, c0)] && ok[at(r, c1)] && ok[at(r0, c)] && ok[at(r1, c)];
+      e.row_n = xn[at(r, c1)] - xn[at(r, c0)];
+      e.col_n = xn[at(r1, c)] - xn[at(r0, c)];
+    }
+  }
 }
 
 bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
@@ -200,8 +233,11 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   std::array<SaddleFit, kMaxCorners> fits;
   std::array<std::uint8_t, kMaxCorners> flags{};
   for (std::size_t i = 0; i < n; ++i) start[i] = out.corners[i].px;
-  // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing.
+  // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing. From a coarse
+  // grid all 11 parameters are fitted; from the previous frame's grid the edges come from that grid
+  // (grid_edges) and only the corner, the blur and the shading are fitted.
   const Grid g0{start, out.rows, out.cols};
+  if (from_previous) grid_edges(start, out.rows, out.cols);
   for (int r = 0; r < out.rows; ++r) {
     for (int c = 0; c < out.cols; ++c) {
       const auto i = static_cast<std::size_t>(r * out.cols + c);
@@ -210,18 +246,12 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       g0.steps(r, c, dc, dr);
       SaddleInit init;
       init.px = start[i];
-      if (from_previous && k.sigma_px > 0) {
-        init.theta1 = k.theta_row;
-        init.theta2 = k.theta_col;
-        init.sigma = k.sigma_px;
-      } else {
-        init.theta1 = std::atan2(dc.y(), dc.x()) + kHalfPi;  // normal of the edge along the row
-        init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
-        init.sigma = 0.8;
-      }
+      init.theta1 = std::atan2(dc.y(), dc.x()) + kHalfPi;  // normal of the edge along the row
+      init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
+      init.sigma = from_previous && k.sigma_px > 0 ? k.sigma_px : 0.8;
       // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
       const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
-      if (!fit_corner(init, r1, 1e-2, fits[i], flags[i])) {
+      if (!fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }
@@ -229,9 +259,10 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
     }
   }
   // Pass 2: the window that the fitted grid calls for, centred on the fitted corner, so that the
-  // result does not depend on where the fit started (tracking and full search must agree); it starts
-  // at the pass-1 optimum and converges in a few iterations.
+  // result does not depend on where the fit started (tracking and full search must agree), with the
+  // edges of the pass-1 grid; it starts at the pass-1 optimum and converges in a few iterations.
   const Grid g1{first, out.rows, out.cols};
+  grid_edges(first, out.rows, out.cols);
   for (int r = 0; r < out.rows; ++r) {
     for (int c = 0; c < out.cols; ++c) {
       const auto i = static_cast<std::size_t>(r * out.cols + c);
@@ -240,7 +271,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
       const SaddleInit again{fits[i].px, fits[i].theta1, fits[i].theta2, fits[i].sigma};
       flags[i] = 0;
-      if (!fit_corner(again, radius, 1e-4, fits[i], flags[i])) {
+      if (!fit_corner(again, &edges_[i], radius, 1e-4, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }
