@@ -1,3 +1,4 @@
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -226,6 +227,33 @@ void CornerDetector::grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& 
   }
 }
 
+namespace {
+// Tracking: the motion of the corners fitted in pass 1 (`fitted`) as one affine map of the previous
+// positions, applied to the others (their blur from the nearest fitted corner is not needed: pass 2
+// starts from the previous blur). False when the motion is not affine within 0.3 px: the board
+// moved too much or a fit locked onto the wrong corner; a full search follows.
+bool affine_motion(const std::array<Eigen::Vector2d, kMaxCorners>& prev,
+                   const std::array<bool, kMaxCorners>& fitted, std::size_t n,
+                   std::array<Eigen::Vector2d, kMaxCorners>& now) {
+  Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+  Eigen::Matrix<double, 3, 2> Atb = Eigen::Matrix<double, 3, 2>::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!fitted[i]) continue;
+    const Eigen::Vector3d a(prev[i].x(), prev[i].y(), 1.0);
+    AtA += a * a.transpose();
+    Atb += a * now[i].transpose();
+  }
+  const Eigen::Matrix<double, 3, 2> M = AtA.ldlt().solve(Atb);
+  if (!M.allFinite()) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d p = M.transpose() * Eigen::Vector3d(prev[i].x(), prev[i].y(), 1.0);
+    if (fitted[i] && (p - now[i]).norm() > 0.3) return false;
+    if (!fitted[i]) now[i] = p;
+  }
+  return true;
+}
+}  // namespace
+
 bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   constexpr double kHalfPi = 1.57079632679489661923;
   const std::size_t n = static_cast<std::size_t>(out.count);
@@ -234,13 +262,21 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   std::array<std::uint8_t, kMaxCorners> flags{};
   for (std::size_t i = 0; i < n; ++i) start[i] = out.corners[i].px;
   // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing. From a coarse
-  // grid all 11 parameters are fitted; from the previous frame's grid the edges come from that grid
-  // (grid_edges) and only the corner, the blur and the shading are fitted.
+  // grid all 11 parameters are fitted at every corner. From the previous frame's grid, only a few
+  // corners are fitted (edges from that grid, see grid_edges: corner, blur and shading only) and an
+  // affine motion through them moves the others: pass 2 only needs its windows centred within a few
+  // hundredths of a pixel of where the full search would centre them.
   const Grid g0{start, out.rows, out.cols};
   if (from_previous) grid_edges(start, out.rows, out.cols);
+  const int R = out.rows - 1, C = out.cols - 1;
+  auto sparse = [&](int r, int c) {
+    return (r == 0 || r == R || r == R / 2) && (c == 0 || c == C || c == C / 2);
+  };
+  std::array<bool, kMaxCorners> fitted{};
   for (int r = 0; r < out.rows; ++r) {
     for (int c = 0; c < out.cols; ++c) {
       const auto i = static_cast<std::size_t>(r * out.cols + c);
+      if (from_previous && !sparse(r, c)) continue;
       const Corner& k = out.corners[i];
       Eigen::Vector2d dc, dr;
       g0.steps(r, c, dc, dr);
@@ -256,7 +292,12 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
         return false;
       }
       first[i] = fits[i].px;
+      fitted[i] = true;
     }
+  }
+  if (from_previous && !affine_motion(start, fitted, n, first)) {
+    failure_ = CornerFailure::track_moved;
+    return false;
   }
   // Pass 2: the window that the fitted grid calls for, centred on the fitted corner, so that the
   // result does not depend on where the fit started (tracking and full search must agree), with the
@@ -269,9 +310,11 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       Eigen::Vector2d dc, dr;
       g1.steps(r, c, dc, dr);
       const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
-      const SaddleInit again{fits[i].px, fits[i].theta1, fits[i].theta2, fits[i].sigma};
+      const Corner& k = out.corners[i];
+      const double sigma = fitted[i] ? fits[i].sigma : (k.sigma_px > 0 ? k.sigma_px : 0.8);
+      const SaddleInit again{first[i], fits[i].theta1, fits[i].theta2, sigma};
       flags[i] = 0;
-      if (!fit_corner(again, &edges_[i], radius, 1e-4, fits[i], flags[i])) {
+      if (!fit_corner(again, &edges_[i], radius, 1e-3, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }

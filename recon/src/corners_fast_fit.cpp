@@ -160,11 +160,10 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
 }
 
 int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active, int n_active,
-                        int max_iterations, double tolerance_px) {
+                        int max_iterations, double tolerance_px, double lambda) {
   MatP JtJ, JtJ2;
   VecP Jtr, Jtr2;
   double cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr);
-  double lambda = 1e-3;
   int it = 0;
   for (; it < max_iterations; ++it) {
     MatP A = JtJ;
@@ -269,8 +268,9 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     p[3] = std::atan2(t2.y(), t2.x()) + kHalfPi;
   }
   init_linear(w, n, p);
-  out.iterations = edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px)
-                         : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px);
+  // With the edges fixed the problem is nearly linear around a close start: (almost) Gauss-Newton.
+  out.iterations = edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, 1e-6)
+                         : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 1e-3);
 
   const double cost = evaluate(w, n, p, nullptr, 0, nullptr, nullptr);
   const double used = static_cast<double>(w.wt.head(n).sum());
