@@ -5,6 +5,7 @@
 
 #include "naneye/recon/corners.hpp"
 #include "naneye/recon/corners_grid.hpp"
+#include "naneye/recon/corners_plane.hpp"
 #include "naneye/recon/corners_refine.hpp"
 
 namespace naneye::recon {
@@ -359,7 +360,7 @@ bool CornerDetector::validate(const CornerResult& out) {
   // The grid must be the image of a plane: a homography in undistorted coordinates.
   double rms = 0, worst = 0;
   failure_ = CornerFailure::not_planar;
-  if (!grid_homography_residual(out, camera_, rms, worst)) return false;
+  if (!grid_plane_residual(out, camera_, rms, worst)) return false;
   if (rms > settings_.max_homography_rms_px || worst > settings_.max_homography_worst_px) return false;
   failure_ = CornerFailure::none;
   return true;

@@ -53,11 +53,9 @@ struct Model {
         hy(float(p[10])) {}
 };
 
-// The weighted cost at p and, with `normal` set, the normal equations of the active parameters.
-double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11>* active, int n_active,
-                MatP* JtJ, VecP* Jtr) {
-  const Model m(p);
-  const auto yx = w.yx.head(n), yy = w.yy.head(n), dx = w.dx.head(n), dy = w.dy.head(n);
+// The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2.
+void shape(FastFitScratch& w, int n, const Model& m) {
+  const auto yx = w.yx.head(n), yy = w.yy.head(n);
   w.U1.head(n) = m.c1 * (yx - m.qx) + m.s1 * (yy - m.qy);
   w.U2.head(n) = m.c2 * (yx - m.qx) + m.s2 * (yy - m.qy);
   const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
@@ -66,6 +64,16 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11
   w.Z.head(n) = m.k * u2;
   erf_and_gauss(w.Z, n, w.E2, w.G2);
   w.S.head(n) = w.E1.head(n) * w.E2.head(n);
+}
+
+// The weighted cost at p and, with JtJ set, the normal equations of the active parameters.
+// `shape_ready`: shape() was already run at this p.
+double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11>* active, int n_active,
+                MatP* JtJ, VecP* Jtr, bool shape_ready = false) {
+  const Model m(p);
+  const auto yx = w.yx.head(n), yy = w.yy.head(n), dx = w.dx.head(n), dy = w.dy.head(n);
+  const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
+  if (!shape_ready) shape(w, n, m);
   w.C.head(n) = m.b + m.hx * dx + m.hy * dy;
   w.r.head(n) = m.a + m.gx * dx + m.gy * dy + w.C.head(n) * w.S.head(n) - w.val.head(n);
   const double cost = static_cast<double>((w.wt.head(n) * w.r.head(n).square()).sum());
@@ -130,13 +138,8 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11
 
 // The six shading terms are linear for a fixed geometry: initialise them by linear least squares.
 void init_linear(FastFitScratch& w, int n, Vec& p) {
-  const Model m(p);
-  const auto yx = w.yx.head(n), yy = w.yy.head(n), dx = w.dx.head(n), dy = w.dy.head(n);
-  w.Z.head(n) = m.k * (m.c1 * (yx - m.qx) + m.s1 * (yy - m.qy));
-  erf_and_gauss(w.Z, n, w.E1, w.G1);
-  w.Z.head(n) = m.k * (m.c2 * (yx - m.qx) + m.s2 * (yy - m.qy));
-  erf_and_gauss(w.Z, n, w.E2, w.G2);
-  w.S.head(n) = w.E1.head(n) * w.E2.head(n);
+  shape(w, n, Model(p));
+  const auto dx = w.dx.head(n), dy = w.dy.head(n);
   const auto S = w.S.head(n);
   w.J[0].head(n).setOnes();
   w.J[1].head(n) = dx;
@@ -159,11 +162,12 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
   p.segment<6>(5) = M.ldlt().solve(rhs);
 }
 
+// Starts right after init_linear (shape() done at p); returns the iterations, `cost` the final cost.
 int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active, int n_active,
-                        int max_iterations, double tolerance_px, double lambda) {
+                        int max_iterations, double tolerance_px, double lambda, double& cost) {
   MatP JtJ, JtJ2;
   VecP Jtr, Jtr2;
-  double cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr);
+  cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr, true);
   int it = 0;
   for (; it < max_iterations; ++it) {
     MatP A = JtJ;
@@ -269,10 +273,10 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   }
   init_linear(w, n, p);
   // With the edges fixed the problem is nearly linear around a close start: (almost) Gauss-Newton.
-  out.iterations = edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, 1e-6)
-                         : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 1e-3);
-
-  const double cost = evaluate(w, n, p, nullptr, 0, nullptr, nullptr);
+  double cost = 0;
+  out.iterations =
+      edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, 1e-6, cost)
+            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 1e-3, cost);
   const double used = static_cast<double>(w.wt.head(n).sum());
   out.theta1 = p[2];
   out.theta2 = p[3];
