@@ -177,6 +177,12 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
     Vec cand = p;
     for (int j = 0; j < n_active; ++j) cand[active[static_cast<std::size_t>(j)]] += step[j];
     if (!(cand[4] > 0.05)) cand[4] = 0.05;
+    // A Gauss-Newton step this small is taken without checking it (its cost change is below the
+    // float noise of the sum): one model evaluation less per fit.
+    if (lambda <= 1e-3 && step.head<2>().norm() < tolerance_px) {
+      p = cand;
+      break;
+    }
     const double c2 = evaluate(w, n, cand, &active, n_active, &JtJ2, &Jtr2);
     if (c2 < cost) {
       p = cand;
