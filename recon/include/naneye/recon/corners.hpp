@@ -7,14 +7,17 @@
 // Never a false corner: a grid that fails any check gives found == false and no corners.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "naneye/recon/camera.hpp"
 #include "naneye/recon/corners_coarse.hpp"
+#include "naneye/recon/corners_fast_fit.hpp"
 #include "naneye/recon/corners_refine.hpp"
 #include "naneye/recon/pair_result.hpp"
+#include "naneye/recon/undistort_map.hpp"
 
 namespace naneye::recon {
 
@@ -117,8 +120,9 @@ class CornerDetector {
   bool full_search(CornerResult& out);
   bool refine_all(CornerResult& out, bool from_previous);
   double fit_radius(double spacing) const;
-  bool fit_corner(const SaddleInit& init, double radius, double tolerance_px, SaddleFit& fit,
-                  std::uint8_t& flags);
+  bool fit_corner(const SaddleInit& init, const EdgeDirections* edges, double radius, double tolerance_px,
+                  SaddleFit& fit, std::uint8_t& flags);
+  void grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols);
   bool validate(const CornerResult& out);
 
   CameraModel camera_;
@@ -130,6 +134,10 @@ class CornerDetector {
   std::vector<unsigned char> gray8_;
   std::vector<Eigen::Vector2f> coarse_;
   CoarseGridFinder coarse_finder_;
+  // Built once per camera (shared by copies of the detector): raw pixel -> undistorted coordinates.
+  std::shared_ptr<const UndistortMap> map_;
+  std::vector<FastFitScratch> work_;  // one fit's work space (a vector: copies get their own)
+  std::array<EdgeDirections, kMaxCorners> edges_{};
 };
 
 // The luminance of a raw frame, without moving any edge: mono is copied; GRBG Bayer is filtered

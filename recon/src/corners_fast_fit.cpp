@@ -1,0 +1,305 @@
+#include "naneye/recon/corners_fast_fit.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace naneye::recon {
+namespace {
+
+constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
+using Arr = FastFitScratch::Arr;
+using Vec = Eigen::Matrix<double, kParams, 1>;
+using MatP = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kParams, kParams>;
+using VecP = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kParams, 1>;
+
+// Which parameters are fitted: all, or all but the two edge normals.
+constexpr std::array<int, 11> kFull = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
+constexpr std::array<int, 11> kFixedEdges = {0, 1, 4, 5, 6, 7, 8, 9, 10, -1, -1};
+
+// erf(z) and exp(-z^2) of a whole array: Abramowitz & Stegun 7.1.26 (|error| <= 1.5e-7, below float
+// precision), which needs exp(-z^2) anyway, and so does the derivative of erf. Eigen packets: the
+// loop runs 4 (SSE) or 8 (AVX) pixels at a time whatever the compiler's optimisation level.
+// `z` holds the arguments on entry and 1 / (1 + p |z|) on return (work space).
+void erf_and_gauss(Arr& z, int n, Arr& e, Arr& g) {
+  constexpr float p = 0.3275911f, a1 = 0.254829592f, a2 = -0.284496736f, a3 = 1.421413741f,
+                  a4 = -1.453152027f, a5 = 1.061405429f;
+  auto zn = z.head(n);
+  g.head(n) = (-zn.square()).exp();
+  e.head(n) = zn;  // keeps the sign
+  zn = (1.0f + p * zn.abs()).inverse();
+  const auto t = z.head(n);
+  const auto y = 1.0f - ((((a5 * t + a4) * t + a3) * t + a2) * t + a1) * t * g.head(n);
+  e.head(n) = (e.head(n) < 0.0f).select(-y, y);
+}
+
+struct Model {
+  float qx, qy, c1, s1, c2, s2, k, inv_s, a, gx, gy, b, hx, hy;
+  explicit Model(const Vec& p)
+      : qx(float(p[0])),
+        qy(float(p[1])),
+        c1(float(std::cos(p[2]))),
+        s1(float(std::sin(p[2]))),
+        c2(float(std::cos(p[3]))),
+        s2(float(std::sin(p[3]))),
+        k(float(0.70710678118654752440 / p[4])),
+        inv_s(float(1.0 / p[4])),
+        a(float(p[5])),
+        gx(float(p[6])),
+        gy(float(p[7])),
+        b(float(p[8])),
+        hx(float(p[9])),
+        hy(float(p[10])) {}
+};
+
+// The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2.
+void shape(FastFitScratch& w, int n, const Model& m) {
+  const auto yx = w.yx.head(n), yy = w.yy.head(n);
+  w.U1.head(n) = m.c1 * (yx - m.qx) + m.s1 * (yy - m.qy);
+  w.U2.head(n) = m.c2 * (yx - m.qx) + m.s2 * (yy - m.qy);
+  const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
+  w.Z.head(n) = m.k * u1;
+  erf_and_gauss(w.Z, n, w.E1, w.G1);
+  w.Z.head(n) = m.k * u2;
+  erf_and_gauss(w.Z, n, w.E2, w.G2);
+  w.S.head(n) = w.E1.head(n) * w.E2.head(n);
+}
+
+// The weighted cost at p and, with JtJ set, the normal equations of the active parameters.
+// `shape_ready`: shape() was already run at this p.
+double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11>* active, int n_active,
+                MatP* JtJ, VecP* Jtr, bool shape_ready = false) {
+  const Model m(p);
+  const auto yx = w.yx.head(n), yy = w.yy.head(n), dx = w.dx.head(n), dy = w.dy.head(n);
+  const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
+  if (!shape_ready) shape(w, n, m);
+  w.C.head(n) = m.b + m.hx * dx + m.hy * dy;
+  w.r.head(n) = m.a + m.gx * dx + m.gy * dy + w.C.head(n) * w.S.head(n) - w.val.head(n);
+  const double cost = static_cast<double>((w.wt.head(n) * w.r.head(n).square()).sum());
+  if (!JtJ) return cost;
+  constexpr float kTwoOverSqrtPi = 1.12837916709551257390f;
+  // A = C dS/du1, B = C dS/du2 (kept in G1, G2).
+  w.G1.head(n) *= (kTwoOverSqrtPi * m.k) * w.C.head(n) * w.E2.head(n);
+  w.G2.head(n) *= (kTwoOverSqrtPi * m.k) * w.C.head(n) * w.E1.head(n);
+  const auto A = w.G1.head(n), B = w.G2.head(n), S = w.S.head(n);
+  for (int j = 0; j < n_active; ++j) {
+    Arr& col = w.J[static_cast<std::size_t>(j)];
+    switch ((*active)[static_cast<std::size_t>(j)]) {
+      case 0:
+        col.head(n) = -(A * m.c1 + B * m.c2);
+        break;
+      case 1:
+        col.head(n) = -(A * m.s1 + B * m.s2);
+        break;
+      case 2:
+        col.head(n) = A * (-m.s1 * (yx - m.qx) + m.c1 * (yy - m.qy));
+        break;
+      case 3:
+        col.head(n) = B * (-m.s2 * (yx - m.qx) + m.c2 * (yy - m.qy));
+        break;
+      case 4:
+        col.head(n) = -(A * u1 + B * u2) * m.inv_s;
+        break;
+      case 5:
+        col.head(n).setOnes();
+        break;
+      case 6:
+        col.head(n) = dx;
+        break;
+      case 7:
+        col.head(n) = dy;
+        break;
+      case 8:
+        col.head(n) = S;
+        break;
+      case 9:
+        col.head(n) = dx * S;
+        break;
+      default:
+        col.head(n) = dy * S;
+        break;
+    }
+    w.Jw[static_cast<std::size_t>(j)].head(n) = w.wt.head(n) * col.head(n);
+  }
+  JtJ->resize(n_active, n_active);
+  Jtr->resize(n_active);
+  for (int a = 0; a < n_active; ++a) {
+    const auto ja = w.Jw[static_cast<std::size_t>(a)].head(n);
+    (*Jtr)[a] = static_cast<double>((ja * w.r.head(n)).sum());
+    for (int b = a; b < n_active; ++b) {
+      const double v = static_cast<double>((ja * w.J[static_cast<std::size_t>(b)].head(n)).sum());
+      (*JtJ)(a, b) = v;
+      (*JtJ)(b, a) = v;
+    }
+  }
+  return cost;
+}
+
+// The six shading terms are linear for a fixed geometry: initialise them by linear least squares.
+void init_linear(FastFitScratch& w, int n, Vec& p) {
+  shape(w, n, Model(p));
+  const auto dx = w.dx.head(n), dy = w.dy.head(n);
+  const auto S = w.S.head(n);
+  w.J[0].head(n).setOnes();
+  w.J[1].head(n) = dx;
+  w.J[2].head(n) = dy;
+  w.J[3].head(n) = S;
+  w.J[4].head(n) = dx * S;
+  w.J[5].head(n) = dy * S;
+  Eigen::Matrix<double, 6, 6> M;
+  Eigen::Matrix<double, 6, 1> rhs;
+  for (std::size_t a = 0; a < 6; ++a) {
+    w.Jw[a].head(n) = w.wt.head(n) * w.J[a].head(n);
+    rhs[static_cast<int>(a)] = static_cast<double>((w.Jw[a].head(n) * w.val.head(n)).sum());
+    for (std::size_t b = 0; b <= a; ++b) {
+      const double v = static_cast<double>((w.Jw[a].head(n) * w.J[b].head(n)).sum());
+      M(static_cast<int>(a), static_cast<int>(b)) = v;
+      M(static_cast<int>(b), static_cast<int>(a)) = v;
+    }
+  }
+  M.diagonal().array() += 1e-9 * (M.diagonal().maxCoeff() + 1.0);
+  p.segment<6>(5) = M.ldlt().solve(rhs);
+}
+
+// Starts right after init_linear (shape() done at p); returns the iterations, `cost` the final cost.
+int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active, int n_active,
+                        int max_iterations, double tolerance_px, double lambda, double& cost) {
+  MatP JtJ, JtJ2;
+  VecP Jtr, Jtr2;
+  cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr, true);
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    MatP A = JtJ;
+    A.diagonal() += lambda * JtJ.diagonal().cwiseMax(1e-12);
+    const VecP step = -A.ldlt().solve(Jtr);
+    if (!step.allFinite()) break;
+    Vec cand = p;
+    for (int j = 0; j < n_active; ++j) cand[active[static_cast<std::size_t>(j)]] += step[j];
+    if (!(cand[4] > 0.05)) cand[4] = 0.05;
+    // A Gauss-Newton step this small is taken without checking it (its cost change is below the
+    // float noise of the sum): one model evaluation less per fit.
+    if (lambda <= 1e-3 && step.head<2>().norm() < tolerance_px) {
+      p = cand;
+      break;
+    }
+    const double c2 = evaluate(w, n, cand, &active, n_active, &JtJ2, &Jtr2);
+    if (c2 < cost) {
+      p = cand;
+      JtJ = JtJ2;
+      Jtr = Jtr2;
+      cost = c2;
+      lambda = std::max(lambda * 0.2, 1e-9);
+      if (step.head<2>().norm() < tolerance_px) break;
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e8) break;
+    }
+  }
+  return it + 1;
+}
+
+}  // namespace
+
+FastFitScratch::FastFitScratch() {
+  for (Arr* a : {&dx, &dy, &yx, &yy, &val, &wt, &r, &E1, &E2, &G1, &G2, &S, &C, &U1, &U2, &Z})
+    a->setZero(kMaxPixels);
+  for (std::size_t i = 0; i < J.size(); ++i) {
+    J[i].setZero(kMaxPixels);
+    Jw[i].setZero(kMaxPixels);
+  }
+}
+
+bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
+                     const SaddleInit& init, const EdgeDirections* edges, double radius, int max_iterations,
+                     double tolerance_px, FastFitScratch& w, SaddleFit& out) {
+  constexpr double kHalfPi = 1.57079632679489661923;
+  out = SaddleFit{};
+  const int half = static_cast<int>(std::ceil(radius)) + 1;
+  if (radius < 1.5 || half > FastFitScratch::kMaxHalf) return false;
+  const int cx = static_cast<int>(std::lround(init.px.x())), cy = static_cast<int>(std::lround(init.px.y()));
+  if (cx - half < 0 || cx + half >= img.col_end || cy - half < img.row_begin || cy + half >= img.row_end) {
+    return false;
+  }
+  // Local undistorted coordinates y = Jp (x(p) - x(c)), Jp = d pixel / d normalized at the centre:
+  // y ~ p - c to first order and the board's edges are straight lines in y (see corners_refine.hpp).
+  float x0f = 0, y0f = 0;
+  bool undist = map.at(cx, cy, x0f, y0f);
+  for (int r = -half; r <= half && undist; ++r) {
+    const unsigned char* v = map.valid_data() + (cy + r) * map.width() + cx - half;
+    for (int q = 0; q <= 2 * half; ++q) undist = undist && v[q] != 0;
+  }
+  const Eigen::Vector2d x0(x0f, y0f);
+  Eigen::Matrix2d Jp = Eigen::Matrix2d::Identity();
+  if (undist) {
+    Eigen::Matrix2d Kaff;
+    Kaff << cam.fx(), cam.skew(), 0.0, cam.fy();
+    Jp = Kaff * cam.distort_jacobian(x0);
+  }
+  const Eigen::Matrix2f Jf = Jp.cast<float>();
+  const Eigen::Vector2d off = init.px - Eigen::Vector2d(cx, cy);
+  const float inv_half = 1.0f / static_cast<float>(half);
+  int n = 0;
+  for (int r = -half; r <= half; ++r) {
+    const float* mx = map.x_data() + (cy + r) * map.width() + cx;
+    const float* my = map.y_data() + (cy + r) * map.width() + cx;
+    for (int q = -half; q <= half; ++q) {
+      // Weight 1 up to `radius` (Chebyshev from the start), a 1 px linear taper beyond: the fit varies
+      // continuously with where it starts, so tracking and full search agree.
+      const double cheb = std::max(std::abs(q - off.x()), std::abs(r - off.y()));
+      const double wt = std::clamp(radius + 0.5 - cheb, 0.0, 1.0);
+      if (wt <= 0.0) continue;
+      float yx = static_cast<float>(q), yy = static_cast<float>(r);
+      if (undist) {
+        const float ux = mx[q] - x0f, uy = my[q] - y0f;
+        yx = Jf(0, 0) * ux + Jf(0, 1) * uy;
+        yy = Jf(1, 0) * ux + Jf(1, 1) * uy;
+      }
+      w.dx[n] = static_cast<float>(q) * inv_half;
+      w.dy[n] = static_cast<float>(r) * inv_half;
+      w.yx[n] = yx;
+      w.yy[n] = yy;
+      w.val[n] = img.at(cy + r, cx + q);
+      w.wt[n] = static_cast<float>(wt);
+      ++n;
+    }
+  }
+
+  Vec p;
+  // y = p - c to first order: the start needs no more.
+  p << off.x(), off.y(), init.theta1, init.theta2, init.sigma, 0, 0, 0, 0, 0, 0;
+  if (edges) {
+    Eigen::Vector2d t1 = edges->row_px, t2 = edges->col_px;
+    if (undist && edges->normalized_ok) {
+      t1 = Jp * edges->row_n;
+      t2 = Jp * edges->col_n;
+    }
+    p[2] = std::atan2(t1.y(), t1.x()) + kHalfPi;
+    p[3] = std::atan2(t2.y(), t2.x()) + kHalfPi;
+  }
+  init_linear(w, n, p);
+  // With the edges fixed the problem is nearly linear around a close start: (almost) Gauss-Newton.
+  double cost = 0;
+  out.iterations =
+      edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, 1e-6, cost)
+            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 1e-3, cost);
+  const double used = static_cast<double>(w.wt.head(n).sum());
+  out.theta1 = p[2];
+  out.theta2 = p[3];
+  out.sigma = p[4];
+  out.contrast = std::abs(p[8]);
+  out.rms = std::sqrt(cost / std::max(1.0, used));
+  out.undistorted = undist;
+  const Eigen::Vector2d q(p[0], p[1]);
+  if (!p.allFinite() || q.cwiseAbs().maxCoeff() > half) return false;
+  if (std::abs(std::sin(p[2] - p[3])) < 0.3) return false;  // edges (nearly) parallel: not a corner
+  if (undist) {
+    out.px = cam.to_pixel(cam.distort(x0 + Jp.inverse() * q));
+  } else {
+    out.px = Eigen::Vector2d(cx, cy) + q;
+  }
+  out.converged = true;
+  return true;
+}
+
+}  // namespace naneye::recon

@@ -1,0 +1,80 @@
+// Tracking allocates nothing per frame (docs/corners.md, "Hot paths allocate nothing"): the global
+// operator new of this test binary counts the allocations made while counting is switched on.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "corner_test_util.hpp"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+
+void* counted_alloc(std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t size) {
+  return counted_alloc(size);
+}
+void* operator new[](std::size_t size) {
+  return counted_alloc(size);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace naneye::recon {
+namespace {
+
+TEST(CornerAllocation, TrackedFramesAllocateNothing) {
+  // The counter itself must see allocations, or the test could not fail.
+  g_counting = true;
+  auto* probe = new std::vector<int>(16);
+  g_counting = false;
+  delete probe;
+  ASSERT_GE(g_allocations.load(), 2);
+
+  const StereoRig& rig = test::paper_d3();
+  CornerDetector det(rig.left);
+  std::mt19937_64 rng(41);
+  sim::Pose pose = test::random_pose(rng, 65, 75, 25, 2);
+  std::vector<cv::Mat> frames;
+  for (int f = 0; f < 6; ++f) {
+    frames.push_back(test::render(f % 2 == 1, pose, 700 + static_cast<std::uint64_t>(f)).left);
+    pose.t += Eigen::Vector3d(0.1, -0.05, 0.2);
+    pose.R = Eigen::AngleAxisd(0.005, Eigen::Vector3d(1, 0.4, 0).normalized()).toRotationMatrix() * pose.R;
+  }
+  CornerResult a, b;
+  ASSERT_TRUE(det.detect_full(test::view_of(frames[0], false), a)) << to_string(det.last_failure());
+  ASSERT_TRUE(det.detect(test::view_of(frames[1], true), &a, b));  // warm-up
+  int tracked = 0;
+  g_allocations = 0;
+  g_counting = true;
+  for (int f = 2; f < 6; ++f) {
+    CornerResult& prev = f % 2 == 0 ? b : a;
+    CornerResult& now = f % 2 == 0 ? a : b;
+    const bool found = det.detect(test::view_of(frames[static_cast<std::size_t>(f)], f % 2 == 1), &prev, now);
+    tracked += found && now.tracked;
+  }
+  g_counting = false;
+  EXPECT_EQ(tracked, 4);
+  EXPECT_EQ(g_allocations.load(), 0);
+}
+
+}  // namespace
+}  // namespace naneye::recon
