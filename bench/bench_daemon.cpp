@@ -1,8 +1,13 @@
-// naneyed's figures (printed, never asserted): allocations per frame in the capture + processing
-// path, capture-to-published latency replaying at 62 fps, requests/s on /v1/depth while streaming
-// (with the dropped-pair counter before and after), steady RSS of the real naneyed process.
+// naneyed's figures (printed, never asserted), on a temporally smooth rendered capture (the board
+// orbiting at ~70 mm, replayed at 62 fps: bench/smooth_capture.hpp) with the REAL processing step
+// (BoardReconstruction: corners, triangulation, board pose, P/D/R) and, as a second row, the
+// timing-only step (board.detect = false):
+//  - allocations per frame on the capture thread and on the reconstruction worker (in-process
+//    Pipeline, max-speed replay; every operator new counted per thread);
+//  - naneyed itself: capture-to-published latency p50/p99, requests/s on /v1/depth while streaming
+//    (dropped-pair counter before and after), steady RSS.
 //
-//   build/bench/bench_daemon [seconds_per_phase=5] [client_threads=2]
+//   build/bench/bench_daemon [seconds_per_phase=5] [client_threads=2] [--quick]
 // clang-format off
 #include <Eigen/Core>  // before httplib.h (its <resolv.h> defines `_res`, which Eigen trips on)
 #include <httplib.h>
@@ -12,6 +17,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -19,24 +26,34 @@
 #include <fstream>
 #include <new>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <thread>
 #include <vector>
 
-#include "../tests/daemon/capture.hpp"
 #include "../tests/daemon/temp_dir.hpp"
 #include "naneye/daemon/pipeline.hpp"
+#include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
+#include "smooth_capture.hpp"
 
 extern char** environ;
 
-// Every heap allocation of the process is counted (all threads).
+// Every heap allocation of the process is counted, in total and per thread: each thread takes a
+// slot of a fixed table on its first allocation (no allocation of its own, no lock).
 static std::atomic<std::uint64_t> g_allocations{0};
+constexpr int kSlots = 64;
+static std::atomic<std::uint64_t> g_slot_allocations[kSlots];
+static std::atomic<int> g_next_slot{0};
+static thread_local int t_slot = -1;
+static int thread_slot() {
+  if (t_slot < 0) t_slot = std::min(g_next_slot.fetch_add(1, std::memory_order_relaxed), kSlots - 1);
+  return t_slot;
+}
 void* operator new(std::size_t n) {
   g_allocations.fetch_add(1, std::memory_order_relaxed);
+  g_slot_allocations[thread_slot()].fetch_add(1, std::memory_order_relaxed);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
@@ -71,31 +88,68 @@ namespace {
 
 const std::string kCalib = std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml";
 
-void allocations_per_frame(const std::filesystem::path& capture, int pairs) {
+// The real processing step, unchanged, with the worker thread's slot noted (the first call).
+class TaggingProcessor final : public daemon::PairProcessor {
+ public:
+  explicit TaggingProcessor(std::unique_ptr<daemon::PairProcessor> inner) : inner_(std::move(inner)) {}
+  void set_rig(const recon::StereoRig& rig) override { inner_->set_rig(rig); }
+  void process(const driver::StereoPair& pair, recon::PairResult& out) override {
+    worker_slot.store(thread_slot(), std::memory_order_relaxed);
+    inner_->process(pair, out);
+    found += out.board_found;
+  }
+  std::string_view name() const override { return inner_->name(); }
+  std::atomic<int> worker_slot{-1};
+  std::atomic<int> found{0};
+
+ private:
+  std::unique_ptr<daemon::PairProcessor> inner_;
+};
+
+std::array<std::uint64_t, kSlots> slot_counts() {
+  std::array<std::uint64_t, kSlots> c{};
+  for (int i = 0; i < kSlots; ++i) c[static_cast<std::size_t>(i)] = g_slot_allocations[i].load();
+  return c;
+}
+
+void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool detect) {
   daemon::Settings settings;
   settings.history = 64;
-  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+  settings.detect = detect;
+  auto tagging = std::make_unique<TaggingProcessor>(daemon::make_processor(settings));
+  TaggingProcessor& tag = *tagging;
+  daemon::Pipeline pipeline(settings, std::move(tagging), daemon::driver_source_factory(),
                             {"file://" + capture.string() + "?speed=max", "bench", false},
                             std::make_shared<const recon::StereoRig>(recon::load_rig(kCalib)));
+  const int main_slot = thread_slot();
   pipeline.start();
   auto wait_for = [&](std::uint64_t n) {
     while (pipeline.pairs_processed() < n) std::this_thread::sleep_for(std::chrono::microseconds(200));
   };
   const std::uint64_t warm = 20;
   wait_for(warm);
-  const auto a0 = g_allocations.load();
+  const auto c0 = slot_counts();
+  const int found0 = tag.found.load();
   const auto t0 = std::chrono::steady_clock::now();
   wait_for(static_cast<std::uint64_t>(pairs));
-  const auto a1 = g_allocations.load();
+  const auto c1 = slot_counts();
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto n = static_cast<double>(pairs - static_cast<int>(warm));
+  const int worker = tag.worker_slot.load();
+  std::uint64_t in_worker = 0, in_others = 0;
+  for (int i = 0; i < kSlots; ++i) {
+    const auto d = c1[static_cast<std::size_t>(i)] - c0[static_cast<std::size_t>(i)];
+    if (i == worker)
+      in_worker += d;
+    else if (i != main_slot)
+      in_others += d;
+  }
   std::printf(
-      "allocations per frame (max-speed replay, source + worker, whole process): %.3f (%llu over %d pairs)\n",
-      static_cast<double>(a1 - a0) / n, static_cast<unsigned long long>(a1 - a0),
-      pairs - static_cast<int>(warm));
-  std::printf(
-      "max-speed replay through the pipeline: %.0f pairs/s (parse + pair + process + publish + frame copy)\n",
-      n / s);
+      "%-40s allocations per frame: recon worker %.2f, capture thread %.2f (%.0f pairs after %llu warm-up, "
+      "%d with a board); max-speed replay %.0f pairs/s\n",
+      detect ? "in-process Pipeline, BoardReconstruction:" : "in-process Pipeline, timing only:",
+      static_cast<double>(in_worker) / n, static_cast<double>(in_others) / n, n,
+      static_cast<unsigned long long>(warm), tag.found.load() - found0, n / s);
   pipeline.stop();
 }
 
@@ -144,15 +198,16 @@ long rss_kb(pid_t pid, const char* key) {
 }
 
 void service_figures(const std::filesystem::path& dir, const std::filesystem::path& capture, double seconds,
-                     int threads) {
+                     int threads, bool detect) {
   const auto log = dir / "naneyed.log";
-  std::vector<std::string> args{NANEYED_PATH,
-                                "--calib",
-                                kCalib,
-                                "--listen",
-                                "127.0.0.1:0",
-                                "--source",
-                                "file://" + capture.string() + "?speed=realtime&loop=1"};
+  const auto config = dir / "naneyed.toml";
+  std::ofstream(config) << "[board]\ndetect = " << (detect ? "true" : "false") << "\n";
+  std::printf("-- naneyed, %s\n", detect ? "board reconstruction (the real processing step)"
+                                         : "timing only (board.detect = false)");
+  std::vector<std::string> args{
+      NANEYED_PATH,  "--config", config.string(),
+      "--calib",     kCalib,     "--listen",
+      "127.0.0.1:0", "--source", "file://" + capture.string() + "?speed=realtime&loop=1"};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -163,14 +218,15 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   posix_spawn(&child.pid, argv[0], &fa, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&fa);
   int port = 0;
-  const std::regex re(R"(listening on http://[^:]+:(\d+)/)");
+  const std::string marker = "listening on http://";
   for (int i = 0; i < 1000 && port == 0; ++i) {
     std::ifstream in(log);
     std::stringstream text;
     text << in.rdbuf();
-    std::smatch m;
     const std::string s = text.str();
-    if (std::regex_search(s, m, re)) port = std::stoi(m[1]);
+    const auto at = s.find(marker);
+    const auto colon = at == std::string::npos ? at : s.find(':', at + marker.size());
+    if (colon != std::string::npos) port = std::atoi(s.c_str() + colon + 1);
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   if (port == 0) {
@@ -191,6 +247,11 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
       s1["capture_to_publish_ms"]["samples"].get<int>(), s1["recon_ms"]["p50"].get<double>(),
       s1["recon_ms"]["p99"].get<double>());
   const long rss_before = rss_kb(child.pid, "VmRSS:");
+  if (auto d = c.Get("/v1/depth"); d && d->status == 200) {
+    const auto j = nlohmann::json::parse(d->body);
+    std::printf("latest /v1/depth: pair %lld, board_found %s, %zu bytes\n", j["pair"].get<long long>(),
+                j["board_found"].get<bool>() ? "true" : "false", d->body.size());
+  }
 
   // Phase 2: keep-alive clients hammering /v1/depth while it streams.
   std::atomic<bool> stop{false};
@@ -232,14 +293,32 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
 }  // namespace
 
 int main(int argc, char** argv) {
-  const double seconds = argc > 1 ? std::atof(argv[1]) : 5.0;
-  const int threads = argc > 2 ? std::atoi(argv[2]) : 2;
+  double seconds = 5.0;
+  int threads = 2, rendered = 124;  // 124 poses: 2 s forwards, 2 s back (246 pairs, ~4 s per loop)
+  int positional = 0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") {
+      seconds = 2.0;
+      rendered = 62;
+    } else if (a.rfind("--", 0) == 0) {
+      continue;  // scripts/bench.sh's --benchmark_* flags
+    } else if (positional++ == 0) {
+      seconds = std::atof(argv[i]);
+    } else {
+      threads = std::atoi(argv[i]);
+    }
+  }
   TempDir dir;
-  const int pairs = 124;  // two seconds of 62 fps
-  const auto capture = dir.path / "bench.raw";
-  write_capture(capture, pairs, 62.0);
-  allocations_per_frame(capture, pairs);
+  const auto capture = dir.path / "smooth.raw";
+  const int pairs = bench::write_smooth_capture(capture, rendered, 62.0);
+  std::printf(
+      "capture: %d pairs of the sim 'orbit' sequence (paper-d3, ~70 mm), 62 fps, forwards then back\n",
+      pairs);
+  allocations_per_frame(capture, pairs, true);
+  allocations_per_frame(capture, pairs, false);
   serialization_cost();
-  service_figures(dir.path, capture, seconds, threads);
+  service_figures(dir.path, capture, seconds, threads, true);
+  service_figures(dir.path, capture, seconds, threads, false);
   return 0;
 }

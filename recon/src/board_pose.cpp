@@ -1,7 +1,9 @@
 #include "naneye/recon/board_pose.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -50,6 +52,70 @@ Normal6 accumulate(const StereoRig& rig, const BoardGeometry& board, std::span<c
   return n;
 }
 
+// The pose of the board plane from one eye's exactly undistorted points, without allocating: the
+// normalized DLT homography board -> normalized image (Hartley & Zisserman, Alg. 4.2; the 9 x 9 normal
+// matrix is fixed-size) decomposed as H ~ [r1 r2 t] (Zhang 2000, Sec. 3.1), R made orthonormal by SVD.
+// The LM below polishes it; IPPE (cv::solvePnP, which allocates) is the fallback when this fails.
+bool homography_pose(const CameraModel& cam, const BoardGeometry& board,
+                     std::span<const CornerObservation> obs, bool use_left, Eigen::Matrix3d& R,
+                     Eigen::Vector3d& t) {
+  // Two passes: centroids and scales first (Hartley's normalization), then the normal matrix.
+  Eigen::Vector2d cb = Eigen::Vector2d::Zero(), ci = Eigen::Vector2d::Zero();
+  int n = 0;
+  auto each = [&](auto&& f) {
+    for (const auto& o : obs) {
+      if (!(use_left ? o.left_ok : o.right_ok)) continue;
+      const Undistorted u = cam.undistort(use_left ? o.left_px : o.right_px);
+      if (!u.ok()) continue;
+      f(board.corner(o.row, o.col).head<2>(), u.normalized);
+    }
+  };
+  each([&](const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
+    cb += b;
+    ci += x;
+    ++n;
+  });
+  if (n < 4) return false;
+  cb /= n;
+  ci /= n;
+  double db = 0, di = 0;
+  each([&](const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
+    db += (b - cb).norm();
+    di += (x - ci).norm();
+  });
+  if (!(db > 0) || !(di > 0)) return false;
+  const double sb = std::sqrt(2.0) * n / db, si = std::sqrt(2.0) * n / di;
+  Eigen::Matrix<double, 9, 9> M = Eigen::Matrix<double, 9, 9>::Zero();
+  each([&](const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
+    const Eigen::Vector2d B = sb * (b - cb), X = si * (x - ci);
+    Eigen::Matrix<double, 9, 1> r1, r2;
+    r1 << B.x(), B.y(), 1, 0, 0, 0, -X.x() * B.x(), -X.x() * B.y(), -X.x();
+    r2 << 0, 0, 0, B.x(), B.y(), 1, -X.y() * B.x(), -X.y() * B.y(), -X.y();
+    M.noalias() += r1 * r1.transpose() + r2 * r2.transpose();
+  });
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> eig(M);
+  if (eig.info() != Eigen::Success) return false;
+  const Eigen::Matrix<double, 9, 1> h = eig.eigenvectors().col(0);
+  Eigen::Matrix3d Hn;
+  Hn << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), h(8);
+  Eigen::Matrix3d Tb, Ti_inv;
+  Tb << sb, 0, -sb * cb.x(), 0, sb, -sb * cb.y(), 0, 0, 1;
+  Ti_inv << 1 / si, 0, ci.x(), 0, 1 / si, ci.y(), 0, 0, 1;
+  const Eigen::Matrix3d H = Ti_inv * Hn * Tb;
+  double lambda = 2.0 / (H.col(0).norm() + H.col(1).norm());
+  if (!std::isfinite(lambda)) return false;
+  if (H(2, 2) * lambda < 0) lambda = -lambda;  // the board in front of the camera
+  Eigen::Matrix3d Rh;
+  Rh.col(0) = lambda * H.col(0);
+  Rh.col(1) = lambda * H.col(1);
+  Rh.col(2) = Rh.col(0).cross(Rh.col(1));
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(Rh, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  R = svd.matrixU() * svd.matrixV().transpose();
+  if (R.determinant() < 0) return false;
+  t = lambda * H.col(2);
+  return t.allFinite() && t.z() > 0.0;
+}
+
 // Planar PnP (IPPE) on the exactly undistorted points of one eye. Returns false with < 4 points.
 bool initial_pose(const CameraModel& cam, const BoardGeometry& board, std::span<const CornerObservation> obs,
                   bool use_left, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
@@ -91,10 +157,12 @@ BoardPose estimate_board_pose(const StereoRig& rig, const BoardGeometry& board,
   BoardPose pose;
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
-  if (!initial_pose(rig.left, board, obs, true, R, t)) {
+  if (!homography_pose(rig.left, board, obs, true, R, t) && !initial_pose(rig.left, board, obs, true, R, t)) {
     Eigen::Matrix3d Rr;
     Eigen::Vector3d tr;
-    if (!initial_pose(rig.right, board, obs, false, Rr, tr)) return pose;
+    if (!homography_pose(rig.right, board, obs, false, Rr, tr) &&
+        !initial_pose(rig.right, board, obs, false, Rr, tr))
+      return pose;
     R = rig.R.transpose() * Rr;  // X_r = Rr P + tr = R_rig (R P + t) + T
     t = rig.R.transpose() * (tr - rig.T);
   }

@@ -2,6 +2,7 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -13,15 +14,6 @@ namespace {
 
 bool valid(const Eigen::Vector3d& X) {
   return X.allFinite();
-}
-
-std::vector<Eigen::Vector3d> valid_points(std::span<const Eigen::Vector3d> points) {
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(points.size());
-  for (const auto& X : points) {
-    if (valid(X)) out.push_back(X);
-  }
-  return out;
 }
 
 // The plane through three points; empty when they are (numerically) collinear.
@@ -37,7 +29,7 @@ std::optional<Plane> plane_through(const Eigen::Vector3d& a, const Eigen::Vector
   return p;
 }
 
-std::optional<double> mean_of_finite(const std::vector<double>& values) {
+std::optional<double> mean_of_finite(std::span<const double> values) {
   double sum = 0.0;
   int n = 0;
   for (double v : values) {
@@ -59,16 +51,23 @@ void check_grid(std::span<const Eigen::Vector3d> grid, int rows, int cols) {
 
 }  // namespace
 
-std::optional<Plane> fit_plane(std::span<const Eigen::Vector3d> points) {
-  const std::vector<Eigen::Vector3d> pts = valid_points(points);
-  if (pts.size() < 3) return std::nullopt;
+namespace {
+
+// fit_plane for at most MaxRows valid points (Eigen::Dynamic: any number). With a fixed maximum the
+// matrix and the SVD's work space live on the stack: the per-pair path allocates nothing.
+template <int MaxRows>
+std::optional<Plane> fit_plane_max(std::span<const Eigen::Vector3d> points, std::size_t valid_count) {
+  if (valid_count < 3) return std::nullopt;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& X : pts) centroid += X;
-  centroid /= static_cast<double>(pts.size());
-  Eigen::MatrixX3d A(static_cast<Eigen::Index>(pts.size()), 3);
-  for (std::size_t i = 0; i < pts.size(); ++i)
-    A.row(static_cast<Eigen::Index>(i)) = (pts[i] - centroid).transpose();
-  const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(A, Eigen::ComputeFullV);
+  for (const auto& X : points)
+    if (valid(X)) centroid += X;
+  centroid /= static_cast<double>(valid_count);
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, MaxRows, 3>;
+  Matrix A(static_cast<Eigen::Index>(valid_count), 3);
+  Eigen::Index row = 0;
+  for (const auto& X : points)
+    if (valid(X)) A.row(row++) = (X - centroid).transpose();
+  const Eigen::JacobiSVD<Matrix> svd(A, Eigen::ComputeFullV);
   const Eigen::Vector3d s = svd.singularValues();
   // Collinear (or coincident) points: the two smallest singular values both vanish.
   if (!(s(1) > 1e-12 * s(0))) return std::nullopt;
@@ -76,6 +75,16 @@ std::optional<Plane> fit_plane(std::span<const Eigen::Vector3d> points) {
   p.normal = svd.matrixV().col(2).normalized();
   p.offset = -p.normal.dot(centroid);
   return p;
+}
+
+constexpr int kStackPoints = 64;  // a whole board's corners (pair_result.hpp's kMaxCorners)
+
+}  // namespace
+
+std::optional<Plane> fit_plane(std::span<const Eigen::Vector3d> points) {
+  const auto n = static_cast<std::size_t>(std::count_if(points.begin(), points.end(), valid));
+  return n <= kStackPoints ? fit_plane_max<kStackPoints>(points, n)
+                           : fit_plane_max<Eigen::Dynamic>(points, n);
 }
 
 std::optional<double> planarity_error(std::span<const Eigen::Vector3d> points) {
@@ -91,9 +100,11 @@ std::optional<double> planarity_error(std::span<const Eigen::Vector3d> points) {
   return sum / n;
 }
 
-std::vector<double> neighbour_distance_errors(std::span<const Eigen::Vector3d> grid, int rows, int cols,
-                                              double square_mm) {
+std::size_t neighbour_distance_errors(std::span<const Eigen::Vector3d> grid, int rows, int cols,
+                                      double square_mm, std::span<double> out) {
   check_grid(grid, rows, cols);
+  const auto count = static_cast<std::size_t>(rows * (cols - 1) + cols * (rows - 1));
+  if (out.size() < count) throw std::invalid_argument("neighbour_distance_errors: output span too small");
   const auto at = [&](int r, int c) -> const Eigen::Vector3d& {
     return grid[static_cast<std::size_t>(r) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(c)];
   };
@@ -101,20 +112,36 @@ std::vector<double> neighbour_distance_errors(std::span<const Eigen::Vector3d> g
     if (!valid(a) || !valid(b)) return std::numeric_limits<double>::quiet_NaN();
     return std::abs((a - b).norm() - square_mm);
   };
-  std::vector<double> out;
-  out.reserve(static_cast<std::size_t>(rows * (cols - 1) + cols * (rows - 1)));
+  std::size_t k = 0;
   for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c + 1 < cols; ++c) out.push_back(error(at(r, c), at(r, c + 1)));
+    for (int c = 0; c + 1 < cols; ++c) out[k++] = error(at(r, c), at(r, c + 1));
   }
   for (int c = 0; c < cols; ++c) {
-    for (int r = 0; r + 1 < rows; ++r) out.push_back(error(at(r, c), at(r + 1, c)));
+    for (int r = 0; r + 1 < rows; ++r) out[k++] = error(at(r, c), at(r + 1, c));
   }
+  return k;
+}
+
+std::vector<double> neighbour_distance_errors(std::span<const Eigen::Vector3d> grid, int rows, int cols,
+                                              double square_mm) {
+  check_grid(grid, rows, cols);
+  std::vector<double> out(static_cast<std::size_t>(rows * (cols - 1) + cols * (rows - 1)));
+  neighbour_distance_errors(grid, rows, cols, square_mm, out);
   return out;
 }
 
 std::optional<double> distance_error(std::span<const Eigen::Vector3d> grid, int rows, int cols,
                                      double square_mm) {
-  return mean_of_finite(neighbour_distance_errors(grid, rows, cols, square_mm));
+  check_grid(grid, rows, cols);
+  // A whole board's neighbour pairs fit on the stack (the per-pair path allocates nothing).
+  std::array<double, 2 * kStackPoints> buffer;
+  const auto count = static_cast<std::size_t>(rows * (cols - 1) + cols * (rows - 1));
+  if (count <= buffer.size()) {
+    const std::size_t n = neighbour_distance_errors(grid, rows, cols, square_mm, buffer);
+    return mean_of_finite(std::span<const double>(buffer.data(), n));
+  }
+  const std::vector<double> errors = neighbour_distance_errors(grid, rows, cols, square_mm);
+  return mean_of_finite(errors);
 }
 
 std::vector<double> median_filter3(std::span<const double> values) {

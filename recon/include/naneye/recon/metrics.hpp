@@ -28,7 +28,7 @@ struct Plane {
 
 // Total least squares over the valid points: the plane through their centroid whose normal is the
 // right singular vector of the smallest singular value of the centred points. Empty for fewer than
-// three valid points or when they are collinear.
+// three valid points or when they are collinear. Allocates nothing for up to 64 valid points.
 std::optional<Plane> fit_plane(std::span<const Eigen::Vector3d> points);
 
 // P: mean |distance| of the valid points to their least-squares plane.
@@ -40,7 +40,12 @@ std::optional<double> planarity_error(std::span<const Eigen::Vector3d> points);
 std::vector<double> neighbour_distance_errors(std::span<const Eigen::Vector3d> grid, int rows, int cols,
                                               double square_mm);
 
-// D: the mean of the valid neighbour_distance_errors.
+// The same written into `out` (at least rows * (cols - 1) + cols * (rows - 1) values, else
+// std::invalid_argument); returns the number written. Allocates nothing: the per-pair path's form.
+std::size_t neighbour_distance_errors(std::span<const Eigen::Vector3d> grid, int rows, int cols,
+                                      double square_mm, std::span<double> out);
+
+// D: the mean of the valid neighbour_distance_errors. Allocates nothing for grids up to 64 corners.
 std::optional<double> distance_error(std::span<const Eigen::Vector3d> grid, int rows, int cols,
                                      double square_mm);
 
