@@ -9,37 +9,8 @@
 #include <cstdlib>
 #include <new>
 
+#include "../support/heap_count.hpp"
 #include "corner_test_util.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Out of line: inlined into a delete expression, GCC would see free() on a pointer from new
-// (-Wmismatched-new-delete under -O1 and the sanitizers).
-[[gnu::noinline]] void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-[[gnu::noinline]] void* operator new(std::size_t n, std::align_val_t a) {
-  ++g_allocations;
-  const auto al = static_cast<std::size_t>(a);
-  if (void* p = std::aligned_alloc(al, (n + al - 1) / al * al)) return p;
-  throw std::bad_alloc();
-}
-[[gnu::noinline]] void operator delete(void* p) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete(void* p, std::align_val_t) noexcept {
-  std::free(p);
-}
-[[gnu::noinline]] void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
-  std::free(p);
-}
 
 namespace naneye::recon {
 namespace {
@@ -77,7 +48,7 @@ TEST(CornerAllocation, FullSearchAllocatesNothingAfterTheFirstFrame) {
   // The first frame may size what it needs.
   det.detect_full(test::view_of(frames[0].image, frames[0].bayer), res);
   int found = 0, expected = 0, tracked_ok = 0;
-  const long before = g_allocations.load();
+  const long before = naneye::test::heap_allocations();
   for (int round = 0; round < 2; ++round) {
     for (const Frame& f : frames) {
       const bool ok = det.detect_full(test::view_of(f.image, f.bayer), res);
@@ -86,7 +57,7 @@ TEST(CornerAllocation, FullSearchAllocatesNothingAfterTheFirstFrame) {
       if (ok) tracked_ok += det.detect(test::view_of(f.image, f.bayer), &res, tracked) && tracked.tracked;
     }
   }
-  const long allocations = g_allocations.load() - before;
+  const long allocations = naneye::test::heap_allocations() - before;
   std::printf("%zu frames x 2: %d boards found (%d in view), %d tracked, %ld heap allocations\n",
               frames.size(), found, expected, tracked_ok, allocations);
   EXPECT_EQ(found, expected);
@@ -103,9 +74,9 @@ TEST(CornerAllocation, CounterSeesTheOpenCVFallback) {
   const cv::Mat empty = test::render(false, sim::Pose{}, 740, test::Scene::no_board).left;
   CornerResult res;
   det.detect_full(test::view_of(empty, false), res);
-  const long before = g_allocations.load();
+  const long before = naneye::test::heap_allocations();
   EXPECT_FALSE(det.detect_full(test::view_of(empty, false), res));
-  EXPECT_GT(g_allocations.load() - before, 0);
+  EXPECT_GT(naneye::test::heap_allocations() - before, 0);
 }
 
 }  // namespace

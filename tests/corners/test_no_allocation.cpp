@@ -6,48 +6,18 @@
 #include <cstdlib>
 #include <new>
 
+#include "../support/heap_count.hpp"
 #include "corner_test_util.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-
-void* counted_alloc(std::size_t size) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-}  // namespace
-
-void* operator new(std::size_t size) {
-  return counted_alloc(size);
-}
-void* operator new[](std::size_t size) {
-  return counted_alloc(size);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace naneye::recon {
 namespace {
 
 TEST(CornerAllocation, TrackedFramesAllocateNothing) {
   // The counter itself must see allocations, or the test could not fail.
-  g_counting = true;
+  const long probe_before = naneye::test::heap_allocations();
   auto* probe = new std::vector<int>(16);
-  g_counting = false;
   delete probe;
-  ASSERT_GE(g_allocations.load(), 2);
+  ASSERT_GE(naneye::test::heap_allocations() - probe_before, 1);
 
   const StereoRig& rig = test::paper_d3();
   CornerDetector det(rig.left);
@@ -63,17 +33,16 @@ TEST(CornerAllocation, TrackedFramesAllocateNothing) {
   ASSERT_TRUE(det.detect_full(test::view_of(frames[0], false), a)) << to_string(det.last_failure());
   ASSERT_TRUE(det.detect(test::view_of(frames[1], true), &a, b));  // warm-up
   int tracked = 0;
-  g_allocations = 0;
-  g_counting = true;
+  const long before = naneye::test::heap_allocations();
   for (int f = 2; f < 6; ++f) {
     CornerResult& prev = f % 2 == 0 ? b : a;
     CornerResult& now = f % 2 == 0 ? a : b;
     const bool found = det.detect(test::view_of(frames[static_cast<std::size_t>(f)], f % 2 == 1), &prev, now);
     tracked += found && now.tracked;
   }
-  g_counting = false;
+  const long allocations = naneye::test::heap_allocations() - before;
   EXPECT_EQ(tracked, 4);
-  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(allocations, 0);
 }
 
 }  // namespace

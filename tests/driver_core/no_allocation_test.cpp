@@ -1,40 +1,16 @@
 // The hot path allocates nothing per frame: after construction, parsing, pairing and handing over
-// any number of records makes no heap allocation (counted by replacing operator new in this binary).
+// any number of records makes no heap allocation (counted by tests/support/heap_count.cpp's operator new).
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cstdlib>
 #include <new>
 
+#include "../support/heap_count.hpp"
 #include "naneye/driver/pair_pool.hpp"
 #include "naneye/driver/pair_ring.hpp"
 #include "naneye/driver/pairer.hpp"
 #include "stream_builder.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::size_t> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-// GCC cannot see that operator new above is malloc-based.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
 
 namespace naneye::driver {
 namespace {
@@ -63,8 +39,7 @@ TEST(NoAllocation, ParsingPairingAndHandOverAllocateNothingPerFrame) {
   StreamParser parser(ParserSettings{}, pairer, counters);
   std::uint64_t popped = 0;
 
-  g_allocations = 0;
-  g_counting = true;
+  const long before = naneye::test::heap_allocations();
   for (int pass = 0; pass < 3; ++pass) {
     const auto& stream = pass == 1 ? damaged : bytes;
     for (std::size_t i = 0; i < stream.size(); i += 16384) {
@@ -76,9 +51,9 @@ TEST(NoAllocation, ParsingPairingAndHandOverAllocateNothingPerFrame) {
     pairer.flush(true);
   }
   while (PairPtr p = channel.ring.try_pop()) ++popped;
-  g_counting = false;
+  const long allocations = naneye::test::heap_allocations() - before;
 
-  EXPECT_EQ(g_allocations.load(), 0u);
+  EXPECT_EQ(allocations, 0);
   EXPECT_GT(popped, 50u);
   EXPECT_EQ(counters.sync_losses.load(), 1u);
   EXPECT_EQ(counters.corrupt_records.load(), 1u);

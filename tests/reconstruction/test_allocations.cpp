@@ -10,42 +10,10 @@
 #include <new>
 
 #include "../corners/corner_test_util.hpp"
+#include "../support/heap_count.hpp"
 #include "naneye/recon/pair_reconstruction.hpp"
 #include "naneye/recon/stereo_reconstructor.hpp"
 #include "naneye/sim/sim_source.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Every heap allocation of this test binary is counted (malloc-based, so ASan still sees them).
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  return operator new(n);
-}
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
 
 using namespace naneye;
 
@@ -90,11 +58,11 @@ TEST(Allocations, ReconstructPairAllocatesNothingPerPair) {
         << "pair " << k;
     const int n = observations(rec, obs);
     ASSERT_EQ(n, 48);
-    const long before = g_allocations.load();
+    const long before = naneye::test::heap_allocations();
     recon::reconstruct_pair(
         rec.rig(), rec.settings().reconstruction,
         std::span<const recon::CornerObservation>(obs.data(), static_cast<std::size_t>(n)), out);
-    const long used = g_allocations.load() - before;
+    const long used = naneye::test::heap_allocations() - before;
     ASSERT_TRUE(out.board_found);
     ASSERT_TRUE(out.metrics);
     EXPECT_TRUE(std::isfinite(out.metrics->distance_error_mm));
@@ -114,12 +82,12 @@ TEST(Allocations, ProcessAllocatesNothingPerTrackedPair) {
   recon::PairResult out;
   long total = 0;
   for (std::size_t k = 0; k < seq.size(); ++k) {
-    const long before = g_allocations.load();
+    const long before = naneye::test::heap_allocations();
     ASSERT_EQ(rec.process(test::view_of(seq[k].left, false), test::view_of(seq[k].right, false), out),
               recon::PairOutcome::board_found);
     if (k == 0) continue;
     EXPECT_TRUE(rec.left_corners().tracked && rec.right_corners().tracked) << "pair " << k;
-    total += g_allocations.load() - before;
+    total += naneye::test::heap_allocations() - before;
   }
   std::printf("StereoReconstructor::process: %.1f heap allocations per tracked pair\n",
               static_cast<double>(total) / static_cast<double>(seq.size() - 1));
