@@ -1,7 +1,7 @@
 // The hot path allocates nothing per pair (issue #6): reconstruct_pair (undistortion, triangulation,
 // board pose, P/D/R) and StereoReconstructor::process as a whole on tracked pairs, counted with a
 // replaced global operator new over several pairs of a smooth sequence after one warm-up pair. (The
-// full search, OpenCV's findChessboardCorners, allocates: it runs only when tracking fails.)
+// full search is allocation-free as well: tests/corners/test_no_alloc.cpp.)
 #include <gtest/gtest.h>
 
 #include <atomic>
