@@ -32,6 +32,18 @@ void Progress::update(const std::string& text, bool force_log) {
   }
 }
 
+void Progress::update(double fraction, const std::string& text, bool force_log) {
+  constexpr int kWidth = 24;
+  fraction = std::clamp(fraction, 0.0, 1.0);
+  const int filled = static_cast<int>(fraction * kWidth + 0.5);
+  char head[64];
+  std::snprintf(head, sizeof head, "[%s%s] %3d %% ",
+                std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                std::string(static_cast<std::size_t>(kWidth - filled), '.').c_str(),
+                static_cast<int>(fraction * 100 + 0.5));
+  update(head + text, force_log);
+}
+
 void Progress::done(const std::string& text) {
   if (tty_) {
     std::fprintf(stderr, "\r\033[K%s\n", text.c_str());
@@ -94,55 +106,62 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
   recon::CornerDetector detect_left(guess.left, corners), detect_right(guess.right, corners);
   recon::CornerResult left, right;
   const auto registry = daemon::make_source_registry();
-  for (const std::string& input : inputs) {
-    for (const auto& [uri, label] : expand_input(input)) {
-      std::unique_ptr<driver::FrameSource> source;
-      try {
-        source = registry.open(uri);
-        source->start();
-      } catch (const std::exception& e) {
-        throw std::runtime_error(uri + ": cannot be read: " + e.what());
-      }
-      unsigned long long index = 0;
-      while (max_pairs <= 0 || static_cast<long long>(index) < max_pairs) {
-        driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
-        if (!pair) {
-          const auto st = source->state();
-          if (st == driver::SourceState::finished || st == driver::SourceState::failed ||
-              st == driver::SourceState::stopped)
-            break;
-          continue;
-        }
-        ++out.pairs;
-        const bool l = detect_left.detect_full(image_view(pair->left), left);
-        const bool r = detect_right.detect_full(image_view(pair->right), right);
-        if (l || r) {
-          recon::CalibrationView v;
-          if (l) v.left = corners_of(left);
-          if (r) {
-            bool keep = true;
-            if (l) {
-              const auto check = recon::resolve_stereo_ids(guess, left, right);
-              keep = check.status == recon::StereoIdStatus::consistent ||
-                     check.status == recon::StereoIdStatus::flipped_right;
-              out.ambiguous += !keep;
-            }
-            if (keep) v.right = corners_of(right);
-          }
-          out.one_eye += v.left.empty() || v.right.empty();
-          out.views.push_back(std::move(v));
-          out.sources.push_back({label, index});
-        } else {
-          ++out.no_board;
-        }
-        ++index;
-        progress.update("detecting boards: " + std::to_string(out.pairs) + " pairs read, " +
-                        std::to_string(out.views.size()) + " boards found");
-      }
-      source->stop();
-      if (auto err = source->error()) throw std::runtime_error(uri + ": cannot be read: " + *err);
-      if (index == 0) throw std::runtime_error(uri + ": no stereo pair could be read");
+  std::vector<InputUri> uris;
+  for (const std::string& input : inputs)
+    for (auto& u : expand_input(input)) uris.push_back(std::move(u));
+  std::size_t uris_done = 0;
+  for (const auto& [uri, label] : uris) {
+    std::unique_ptr<driver::FrameSource> source;
+    try {
+      source = registry.open(uri);
+      source->start();
+    } catch (const std::exception& e) {
+      throw std::runtime_error(uri + ": cannot be read: " + e.what());
     }
+    unsigned long long index = 0;
+    while (max_pairs <= 0 || static_cast<long long>(index) < max_pairs) {
+      driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
+      if (!pair) {
+        const auto st = source->state();
+        if (st == driver::SourceState::finished || st == driver::SourceState::failed ||
+            st == driver::SourceState::stopped)
+          break;
+        continue;
+      }
+      ++out.pairs;
+      const bool l = detect_left.detect_full(image_view(pair->left), left);
+      const bool r = detect_right.detect_full(image_view(pair->right), right);
+      if (l || r) {
+        recon::CalibrationView v;
+        if (l) v.left = corners_of(left);
+        if (r) {
+          bool keep = true;
+          if (l) {
+            const auto check = recon::resolve_stereo_ids(guess, left, right);
+            keep = check.status == recon::StereoIdStatus::consistent ||
+                   check.status == recon::StereoIdStatus::flipped_right;
+            out.ambiguous += !keep;
+          }
+          if (keep) v.right = corners_of(right);
+        }
+        out.one_eye += v.left.empty() || v.right.empty();
+        out.views.push_back(std::move(v));
+        out.sources.push_back({label, index});
+      } else {
+        ++out.no_board;
+      }
+      ++index;
+      // The bar moves per input (a folder of dumps, several --input); within one input only
+      // when --max-pairs bounds it (a stream does not announce its length).
+      const double within = max_pairs > 0 ? static_cast<double>(index) / static_cast<double>(max_pairs) : 0.0;
+      progress.update((static_cast<double>(uris_done) + within) / static_cast<double>(uris.size()),
+                      "detecting boards: " + std::to_string(out.pairs) + " pairs read, " +
+                          std::to_string(out.views.size()) + " boards found");
+    }
+    source->stop();
+    if (auto err = source->error()) throw std::runtime_error(uri + ": cannot be read: " + *err);
+    if (index == 0) throw std::runtime_error(uri + ": no stereo pair could be read");
+    ++uris_done;
   }
   progress.done("detected boards: " + std::to_string(out.views.size()) + " views in " +
                 std::to_string(out.pairs) + " pairs (" + std::to_string(out.no_board) +

@@ -18,6 +18,8 @@ class Progress {
   explicit Progress(int log_every = 50);
   ~Progress();
   void update(const std::string& text, bool force_log = false);
+  // The same with a bar: fraction of the whole job done, 0..1 ("[#######.......]  42 % text").
+  void update(double fraction, const std::string& text, bool force_log = false);
   void done(const std::string& text);  // ends the line (terminal) or logs it
   bool tty() const { return tty_; }
 

@@ -110,12 +110,14 @@ void run_calibrate(const CalibrateOptions& o) {
   std::unique_ptr<recon::SplitValidation> splits;
   std::unique_ptr<recon::OddEvenValidation> odd_even;
   if (o.cross_validate) {
+    // Five calibrations in all: three splits, then the odd and the even half.
     progress.update(
+        0.0,
         "cross-validating: " + std::to_string(3) + " splits of " + std::to_string(o.train_views) + " views",
         true);
     splits = std::make_unique<recon::SplitValidation>(
         recon::cross_validate_splits(views.views, board, settings, 3, o.train_views));
-    progress.update("cross-validating: odd against even views", true);
+    progress.update(0.6, "cross-validating: odd against even views", true);
     odd_even = std::make_unique<recon::OddEvenValidation>(
         recon::cross_validate_odd_even(views.views, board, settings));
     progress.done("cross-validation done");
