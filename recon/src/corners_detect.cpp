@@ -327,6 +327,17 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }
+      // The grid's edge directions hold when the pass-1 corners are right to a few hundredths of a
+      // pixel; a close board (sharp edges over few pixels) can miss that and leave the fixed-edge
+      // fit poor: then free the edges (11 parameters) and keep the better fit.
+      if (fits[i].rms > settings_.max_relative_residual * fits[i].contrast) {
+        SaddleFit free_fit;
+        std::uint8_t free_flags = 0;
+        if (fit_corner(again, nullptr, radius, 1e-3, free_fit, free_flags) && free_fit.rms < fits[i].rms) {
+          fits[i] = free_fit;
+          flags[i] = free_flags;
+        }
+      }
     }
   }
   for (std::size_t i = 0; i < n; ++i) {

@@ -119,11 +119,20 @@ int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col
   const int r0 = std::max(row - 1, 0), r1 = std::min(row + 1, r.rows - 1);
   const Eigen::Vector2d dc = (r.at(row, c1).px - r.at(row, c0).px) / (c1 - c0);
   const Eigen::Vector2d dr = (r.at(r1, col).px - r.at(r0, col).px) / (r1 - r0);
-  // Quadrant centres at 0.35 of the spacing along each diagonal.
-  const Eigen::Vector2d a = p + 0.35 * (dc + dr), b = p - 0.35 * (dc + dr);
-  const Eigen::Vector2d c = p + 0.35 * (dc - dr), d = p - 0.35 * (dc - dr);
-  const float va = bilinear(img, a.x(), a.y()), vb = bilinear(img, b.x(), b.y());
-  const float vc = bilinear(img, c.x(), c.y()), vd = bilinear(img, d.x(), d.y());
+  // Quadrant centres at 0.35 of the spacing along each diagonal; for a corner near the image border
+  // (every corner in view, but the outer squares cut by the edge) closer, down to 0.18, as long as the
+  // samples stay >= 2.5 px from the corner (outside its blur, a few tenths of a pixel here).
+  float va = -1, vb = -1, vc = -1, vd = -1;
+  for (const double f : {0.35, 0.25, 0.18}) {
+    const Eigen::Vector2d s1 = f * (dc + dr), s2 = f * (dc - dr);
+    if (std::min(s1.norm(), s2.norm()) < 2.5) break;
+    const Eigen::Vector2d a = p + s1, b = p - s1, c = p + s2, d = p - s2;
+    va = bilinear(img, a.x(), a.y());
+    vb = bilinear(img, b.x(), b.y());
+    vc = bilinear(img, c.x(), c.y());
+    vd = bilinear(img, d.x(), d.y());
+    if (va >= 0 && vb >= 0 && vc >= 0 && vd >= 0) break;
+  }
   if (va < 0 || vb < 0 || vc < 0 || vd < 0) return 0;
   const float diag1 = std::min(va, vb), diag2 = std::min(vc, vd);
   const float diag1_max = std::max(va, vb), diag2_max = std::max(vc, vd);
