@@ -1,6 +1,5 @@
 #include "naneye/recon/corners_grid.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
@@ -41,64 +40,6 @@ bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<uns
   if (!ok || static_cast<int>(pts.size()) != rows * cols) return false;
   coarse.resize(pts.size());
   for (std::size_t i = 0; i < pts.size(); ++i) coarse[i] = {pts[i].x, pts[i].y};
-  return true;
-}
-
-bool grid_homography_residual(const CornerResult& r, const CameraModel& cam, double& rms_px,
-                              double& worst_px) {
-  // DLT (Hartley & Zisserman, Alg. 4.2) with normalization of the image side.
-  std::array<Eigen::Vector2d, kMaxCorners> xs;
-  std::array<Eigen::Vector2d, kMaxCorners> bs;
-  int n = 0;
-  for (int i = 0; i < r.count; ++i) {
-    const Corner& c = r.corners[static_cast<std::size_t>(i)];
-    if (c.flags & kCornerBeyondFold) continue;
-    const Undistorted u = cam.undistort(c.px);
-    if (!u.ok()) continue;
-    xs[static_cast<std::size_t>(n)] = u.normalized * cam.fx();
-    bs[static_cast<std::size_t>(n)] = {c.col, c.row};
-    ++n;
-  }
-  if (n < 8) return false;
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  for (int i = 0; i < n; ++i) mean += xs[static_cast<std::size_t>(i)];
-  mean /= n;
-  double spread = 0;
-  for (int i = 0; i < n; ++i) spread += (xs[static_cast<std::size_t>(i)] - mean).norm();
-  spread = spread / n;
-  if (!(spread > 0)) return false;
-  const double s = std::sqrt(2.0) / spread;
-  // The null vector of A is the eigenvector of A^T A with the smallest eigenvalue: fixed-size 9x9
-  // (no heap, the detector allocates nothing per frame); with the normalization above the squared
-  // condition number costs nothing at the 0.5 px scale this is compared with.
-  Eigen::Matrix<double, 9, 9> AtA = Eigen::Matrix<double, 9, 9>::Zero();
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector2d x = (xs[static_cast<std::size_t>(i)] - mean) * s;
-    const Eigen::Vector3d b(bs[static_cast<std::size_t>(i)].x(), bs[static_cast<std::size_t>(i)].y(), 1.0);
-    Eigen::Matrix<double, 9, 1> r1, r2;
-    r1 << b, 0, 0, 0, -x.x() * b;
-    r2 << 0, 0, 0, b, -x.y() * b;
-    AtA.selfadjointView<Eigen::Lower>().rankUpdate(r1);
-    AtA.selfadjointView<Eigen::Lower>().rankUpdate(r2);
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> eig(AtA);
-  const Eigen::Matrix<double, 9, 1> h = eig.eigenvectors().col(0);
-  Eigen::Matrix3d H;
-  H << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8];
-  double sum = 0;
-  worst_px = 0;
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d b(bs[static_cast<std::size_t>(i)].x(), bs[static_cast<std::size_t>(i)].y(), 1.0);
-    const Eigen::Vector3d p = H * b;
-    if (std::abs(p.z()) < 1e-12) return false;
-    const Eigen::Vector2d x = p.head<2>() / p.z() / s + mean;
-    const double e = (x - xs[static_cast<std::size_t>(i)]).norm();
-    sum += e * e;
-    worst_px = std::max(worst_px, e);
-  }
-  // The algebraic fit is not the geometric optimum; with 48 corners and sub-pixel noise the
-  // difference is far below the thresholds this is compared with.
-  rms_px = std::sqrt(sum / n);
   return true;
 }
 

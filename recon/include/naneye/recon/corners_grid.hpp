@@ -15,12 +15,6 @@ namespace naneye::recon {
 bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<unsigned char>& gray8,
                         std::vector<Eigen::Vector2f>& coarse);
 
-// RMS and worst residual (pixels, scaled by fx) of a homography from board coordinates (col, row)
-// to the undistorted normalized corners. Corners beyond the fold (flag set) are left out; fewer than
-// 8 usable corners gives false.
-bool grid_homography_residual(const CornerResult& r, const CameraModel& cam, double& rms_px,
-                              double& worst_px);
-
 // +1 / -1: which diagonal pair of quadrants around corner (row, col) is the brighter one, sampled
 // from the image along the grid directions; 0 when unclear. A true checkerboard alternates.
 int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col);
