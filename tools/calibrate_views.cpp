@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/corners_stereo.hpp"
 
@@ -80,15 +81,6 @@ std::vector<InputUri> expand_input(const std::string& input) {
 
 namespace {
 
-recon::RawImageView image_view(const driver::Frame& f) {
-  recon::RawImageView v;
-  v.data = f.pixels.data();
-  v.width = v.height = v.stride = driver::kSensorSize;
-  v.layout =
-      f.color == driver::ColorMode::bayer_grbg ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
-  return v;
-}
-
 std::vector<recon::BoardCorner> corners_of(const recon::CornerResult& r) {
   std::vector<recon::BoardCorner> out;
   for (int i = 0; i < r.count; ++i) {
@@ -129,8 +121,8 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
         continue;
       }
       ++out.pairs;
-      const bool l = detect_left.detect_full(image_view(pair->left), left);
-      const bool r = detect_right.detect_full(image_view(pair->right), right);
+      const bool l = detect_left.detect_full(daemon::image_view(pair->left), left);
+      const bool r = detect_right.detect_full(daemon::image_view(pair->right), right);
       if (l || r) {
         recon::CalibrationView v;
         if (l) v.left = corners_of(left);
