@@ -39,7 +39,7 @@ TEST(CornerBorder, BoardsWithCornersNearTheEdgeAreFound) {
     const bool turned = test::best_turn(res, truth);
     EXPECT_LT(test::max_error(res, truth, turned), 0.25) << "board " << tried;
   }
-  EXPECT_EQ(near, 3) << tried << "the pose sampler no longer reaches the border: the test checks nothing";
+  EXPECT_EQ(near, 3) << "after " << tried << " poses: the pose sampler no longer reaches the border";
 }
 
 }  // namespace
