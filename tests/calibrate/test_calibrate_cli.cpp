@@ -3,39 +3,18 @@
 // written.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 #include <unistd.h>
-#include <array>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../tools/run_cli.hpp"
 #include "calib_scene.hpp"
 
 using namespace naneye;
 
 namespace {
-
-struct CliRun {
-  int exit_code = -1;
-  std::string out;
-};
-
-// stdout, and stderr too when merge_stderr is set.
-CliRun run_cli(const std::string& args, bool merge_stderr = true) {
-  const std::string cmd = std::string(NANEYE_CLI) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-  CliRun r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 class CalibrateCli : public ::testing::Test {
  protected:
@@ -53,9 +32,10 @@ class CalibrateCli : public ::testing::Test {
 TEST_F(CalibrateCli, WritesACalibrationThatLoadRigReads) {
   const auto out = dir_ / "calib.yaml";
   // Two inputs, a path and a URI: the mono capture's 9 full boards and the Bayer capture's 6.
-  const CliRun r = run_cli("calibrate --input " + data("sim-d3-mono/capture.raw") + " --input 'file://" +
-                           data("sim-d3-bayer/capture.raw") +
-                           "?color=grbg' --pattern 6x8 --square-mm 5.99 -o " + out.string());
+  const test::CliResult r = test::run_cli(
+      "calibrate --input " + data("sim-d3-mono/capture.raw") + " --input 'file://" +
+          data("sim-d3-bayer/capture.raw") + "?color=grbg' --pattern 6x8 --square-mm 5.99 -o " + out.string(),
+      true);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("fx"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("+-"), std::string::npos);
@@ -99,8 +79,8 @@ TEST_F(CalibrateCli, WritesACalibrationThatLoadRigReads) {
 
 TEST_F(CalibrateCli, JsonReportAndFixK3) {
   const auto out = dir_ / "calib.yaml";
-  const CliRun r =
-      run_cli("calibrate --json --fix-k3 --input " + data("sim-d3-mono") + " -o " + out.string(), false);
+  const test::CliResult r = test::run_cli(
+      "calibrate --json --fix-k3 --input " + data("sim-d3-mono") + " -o " + out.string(), false);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["ok"].get<bool>());
@@ -114,16 +94,16 @@ TEST_F(CalibrateCli, JsonReportAndFixK3) {
 
 TEST_F(CalibrateCli, RefusesBadInputAndWritesNothing) {
   const auto out = dir_ / "calib.yaml";
-  const CliRun missing =
-      run_cli("calibrate --input " + (dir_ / "nothing.raw").string() + " -o " + out.string());
+  const test::CliResult missing =
+      test::run_cli("calibrate --input " + (dir_ / "nothing.raw").string() + " -o " + out.string(), true);
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.out.find("no such file"), std::string::npos) << missing.out;
-  const CliRun few =
-      run_cli("calibrate --max-pairs 3 --input " + data("sim-d3-mono/capture.raw") + " -o " + out.string());
+  const test::CliResult few = test::run_cli(
+      "calibrate --max-pairs 3 --input " + data("sim-d3-mono/capture.raw") + " -o " + out.string(), true);
   EXPECT_NE(few.exit_code, 0);
   EXPECT_NE(few.out.find("at least 3"), std::string::npos) << few.out;
-  const CliRun none =
-      run_cli("calibrate --pattern 4x9 --input " + data("sim-d1-cut/capture.raw") + " -o " + out.string());
+  const test::CliResult none = test::run_cli(
+      "calibrate --pattern 4x9 --input " + data("sim-d1-cut/capture.raw") + " -o " + out.string(), true);
   EXPECT_NE(none.exit_code, 0);
   EXPECT_NE(none.out.find("no board found"), std::string::npos) << none.out;
   EXPECT_FALSE(std::filesystem::exists(out));
@@ -132,7 +112,7 @@ TEST_F(CalibrateCli, RefusesBadInputAndWritesNothing) {
 
 TEST_F(CalibrateCli, MaxViewsThinsEvenly) {
   const auto out = dir_ / "calib.yaml";
-  const CliRun r = run_cli(
+  const test::CliResult r = test::run_cli(
       "calibrate --json --max-views 4 --input " + data("sim-d3-mono/capture.raw") + " -o " + out.string(),
       false);
   ASSERT_EQ(r.exit_code, 0) << r.out;
