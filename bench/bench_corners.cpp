@@ -116,7 +116,7 @@ void BM_Ours(benchmark::State& state, bool tracked) {
   recon::CornerDetector left(rig.left), right(rig.right);
   std::vector<recon::CornerResult> previous(eyes.size());
   for (std::size_t i = 0; i < eyes.size(); ++i) {
-    (eyes[i].left ? left : right).detect_full(test::view_of(eyes[i].before, eyes[i].bayer), previous[i]);
+    (eyes[i].left ? left : right).detect_full(sim::raw_view(eyes[i].before, eyes[i].bayer), previous[i]);
   }
   recon::CornerResult res;
   std::size_t i = 0;
@@ -127,7 +127,7 @@ void BM_Ours(benchmark::State& state, bool tracked) {
     const Eye& e = eyes[i];
     const double t0 = cpu_seconds();
     recon::CornerDetector& det = e.left ? left : right;
-    const bool found = det.detect(test::view_of(e.now, e.bayer), tracked ? &previous[i] : nullptr, res);
+    const bool found = det.detect(sim::raw_view(e.now, e.bayer), tracked ? &previous[i] : nullptr, res);
     benchmark::DoNotOptimize(res);
     cpu += cpu_seconds() - t0;
     if (tally.eye_found.size() < eyes.size()) {
@@ -190,7 +190,7 @@ void BM_CoarseGrid(benchmark::State& state, bool opencv) {
   std::vector<float> scratch(250 * 250);
   for (std::size_t i = 0; i < eyes.size(); ++i) {
     lumas[i].resize(250 * 250);
-    recon::raw_to_luminance(test::view_of(eyes[i].now, eyes[i].bayer), lumas[i].data(), scratch.data());
+    recon::raw_to_luminance(sim::raw_view(eyes[i].now, eyes[i].bayer), lumas[i].data(), scratch.data());
   }
   recon::CoarseGridFinder left(rig.left), right(rig.right);
   std::vector<unsigned char> gray8;
@@ -227,7 +227,7 @@ void BM_NoBoard(benchmark::State& state, bool opencv_fallback) {
   std::size_t i = 0;
   int found = 0;
   for (auto _ : state) {
-    found += det.detect_full(test::view_of(frames[i].first, frames[i].second), res);
+    found += det.detect_full(sim::raw_view(frames[i].first, frames[i].second), res);
     i = (i + 1) % frames.size();
   }
   state.counters["found"] = found;

@@ -43,16 +43,6 @@ struct Frames {
   bool bayer = false;
 };
 
-recon::RawImageView view_of(const cv::Mat& m, bool bayer) {
-  recon::RawImageView v;
-  v.data = m.ptr<std::uint16_t>();
-  v.width = m.cols;
-  v.height = m.rows;
-  v.stride = static_cast<int>(m.step1());
-  v.layout = bayer ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
-  return v;
-}
-
 // Accuracy and time of one path over the sequence.
 struct Row {
   std::string name;
@@ -117,7 +107,7 @@ Row run_ours(const recon::StereoRig& rig, const Frames& f, bool tracking, int re
     recon::StereoReconstructor rec(rig, s);  // a fresh stream: the first pair is a full search
     for (const sim::RenderedPair& p : f.pairs) {
       const double t0 = thread_cpu_s();
-      const bool ok = rec.process(view_of(p.left, f.bayer), view_of(p.right, f.bayer), out) ==
+      const bool ok = rec.process(sim::raw_view(p.left, f.bayer), sim::raw_view(p.right, f.bayer), out) ==
                       recon::PairOutcome::board_found;
       row.ms.push_back(1e3 * (thread_cpu_s() - t0));
       if (rep != 0) continue;
@@ -146,8 +136,8 @@ Row run_opencv(const recon::StereoRig& rig, const Frames& f, int reps) {
   for (int rep = 0; rep < reps; ++rep) {
     for (const sim::RenderedPair& p : f.pairs) {
       const double t0 = thread_cpu_s();
-      const recon::OpenCvPathResult cv =
-          recon::opencv_reconstruct_pair(rig, view_of(p.left, f.bayer), view_of(p.right, f.bayer));
+      const recon::OpenCvPathResult cv = recon::opencv_reconstruct_pair(rig, sim::raw_view(p.left, f.bayer),
+                                                                        sim::raw_view(p.right, f.bayer));
       row.ms.push_back(1e3 * (thread_cpu_s() - t0));
       if (rep != 0) continue;
       row.whole += p.truth.board_in_view;

@@ -338,4 +338,14 @@ RenderedPair render_pair(const SceneSettings& scene, const SensorSettings& senso
   return Renderer(rig, scene, sensor).render(board, rng);
 }
 
+recon::RawImageView raw_view(const cv::Mat& image, bool bayer) {
+  recon::RawImageView v;
+  v.data = image.ptr<std::uint16_t>();
+  v.width = image.cols;
+  v.height = image.rows;
+  v.stride = static_cast<int>(image.step1());
+  v.layout = bayer ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
+  return v;
+}
+
 }  // namespace naneye::sim

@@ -15,15 +15,6 @@ using namespace naneye;
 
 namespace {
 
-recon::RawImageView view_of(const cv::Mat& m) {
-  recon::RawImageView v;
-  v.data = m.ptr<std::uint16_t>();
-  v.width = m.cols;
-  v.height = m.rows;
-  v.stride = static_cast<int>(m.step1());
-  return v;
-}
-
 // The truth with every intrinsic a little off: what a user's nominal calibration would be.
 recon::StereoRig wrong_guess(const recon::StereoRig& truth) {
   recon::StereoRig g = truth;
@@ -52,7 +43,8 @@ TEST(CalibrateRendered, Dataset3WithinThreeSigma) {
   sim::Rng rng(5);
   for (const auto& pose : test::sample_poses(truth, 12, 9)) {
     const sim::RenderedPair img = renderer.render(pose, rng);
-    if (!left.detect_full(view_of(img.left), l) || !right.detect_full(view_of(img.right), r)) continue;
+    if (!left.detect_full(sim::raw_view(img.left), l) || !right.detect_full(sim::raw_view(img.right), r))
+      continue;
     const auto ids = recon::resolve_stereo_ids(guess, l, r);
     if (ids.status != recon::StereoIdStatus::consistent && ids.status != recon::StereoIdStatus::flipped_right)
       continue;

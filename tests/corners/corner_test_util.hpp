@@ -45,16 +45,6 @@ inline sim::RenderedPair render(bool bayer, const sim::Pose& pose, std::uint64_t
   return renderer(bayer, scene).render(pose, rng);
 }
 
-inline recon::RawImageView view_of(const cv::Mat& m, bool bayer) {
-  recon::RawImageView v;
-  v.data = m.ptr<std::uint16_t>();
-  v.width = m.cols;
-  v.height = m.rows;
-  v.stride = static_cast<int>(m.step1());
-  v.layout = bayer ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
-  return v;
-}
-
 // Every inner corner imaged and at least `margin` pixels inside the usable area (columns 0..248,
 // rows 1..248): the corners a saddle fit can see whole.
 inline bool fully_in_view(const std::vector<Eigen::Vector2d>& px, const std::vector<bool>& imaged,

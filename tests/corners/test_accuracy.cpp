@@ -41,8 +41,8 @@ Stats run_pairs(bool bayer, int count, std::uint64_t seed) {
     const bool in_view = test::fully_in_view(p.truth.left_px, p.truth.left_imaged) &&
                          test::fully_in_view(p.truth.right_px, p.truth.right_imaged);
     CornerResult rl, rr;
-    const bool fl = left.detect_full(test::view_of(p.left, bayer), rl);
-    const bool fr = right.detect_full(test::view_of(p.right, bayer), rr);
+    const bool fl = left.detect_full(sim::raw_view(p.left, bayer), rl);
+    const bool fr = right.detect_full(sim::raw_view(p.right, bayer), rr);
     ++st.pairs;
     if (!fl || !fr) {
       std::printf("pair %d not found: left %s, right %s\n", k, fl ? "found" : to_string(left.last_failure()),

@@ -33,7 +33,7 @@ TEST(CornerBorder, BoardsWithCornersNearTheEdgeAreFound) {
     }
     ++near;
     CornerResult res;
-    ASSERT_TRUE(det.detect_full(test::view_of(img.left, false), res))
+    ASSERT_TRUE(det.detect_full(sim::raw_view(img.left, false), res))
         << "board " << tried << " (nearest corner " << border_distance(truth)
         << " px from the border): " << to_string(det.last_failure());
     const bool turned = test::best_turn(res, truth);

@@ -12,7 +12,7 @@ namespace naneye::recon {
 namespace {
 
 LumaView luma_of(const cv::Mat& m, bool bayer, std::vector<float>& luma, std::vector<float>& scratch) {
-  const RawImageView raw = test::view_of(m, bayer);
+  const RawImageView raw = sim::raw_view(m, bayer);
   luma.resize(static_cast<std::size_t>(raw.width) * raw.height);
   scratch.resize(luma.size());
   raw_to_luminance(raw, luma.data(), scratch.data());
@@ -118,13 +118,13 @@ TEST(CoarseGrid, PatternSizeIsExact) {
     CornerResult res;
     if (test::fully_in_view(small.truth.left_px, small.truth.left_imaged)) {
       ++in_view;
-      if (det.detect_full(test::view_of(small.left, false), res)) {
+      if (det.detect_full(sim::raw_view(small.left, false), res)) {
         ++found_small;
         EXPECT_EQ(res.count, 35);
         EXPECT_LT(test::max_error(res, small.truth.left_px, test::best_turn(res, small.truth.left_px)), 0.25);
       }
     }
-    found_large += det.detect_full(test::view_of(large.left, false), res);
+    found_large += det.detect_full(sim::raw_view(large.left, false), res);
   }
   EXPECT_GE(in_view, 2);
   EXPECT_EQ(found_small, in_view);

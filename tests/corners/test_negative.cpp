@@ -16,7 +16,7 @@ TEST(CornerNegative, NoBoardNothingFound) {
     const sim::RenderedPair p =
         test::render(bayer, sim::Pose{}, 100 + static_cast<std::uint64_t>(k), test::Scene::no_board);
     CornerResult res;
-    EXPECT_FALSE(det.detect_full(test::view_of(p.left, bayer), res));
+    EXPECT_FALSE(det.detect_full(sim::raw_view(p.left, bayer), res));
     EXPECT_EQ(res.count, 0);
   }
 }
@@ -40,7 +40,7 @@ TEST(CornerNegative, BoardCutByEdgeGivesNoFalseCorner) {
     if (test::fully_in_view(p.truth.left_px, p.truth.left_imaged, 0.0)) continue;
     ++cut;
     CornerResult res;
-    if (!det.detect_full(test::view_of(p.left, bayer), res)) continue;
+    if (!det.detect_full(sim::raw_view(p.left, bayer), res)) continue;
     ++found;
     if (test::max_error(res, p.truth.left_px, test::best_turn(res, p.truth.left_px)) > 0.5) ++false_corners;
   }
@@ -60,7 +60,7 @@ TEST(CornerNegative, SmallerBoardNotFound) {
     const sim::RenderedPair p =
         test::render(false, pose, 300 + static_cast<std::uint64_t>(k), test::Scene::small_board);
     CornerResult res;
-    EXPECT_FALSE(det.detect_full(test::view_of(p.left, false), res)) << "pose " << k;
+    EXPECT_FALSE(det.detect_full(sim::raw_view(p.left, false), res)) << "pose " << k;
   }
 }
 

@@ -46,15 +46,15 @@ TEST(CornerAllocation, FullSearchAllocatesNothingAfterTheFirstFrame) {
   CornerDetector det(rig.left);
   CornerResult res, tracked;
   // The first frame may size what it needs.
-  det.detect_full(test::view_of(frames[0].image, frames[0].bayer), res);
+  det.detect_full(sim::raw_view(frames[0].image, frames[0].bayer), res);
   int found = 0, expected = 0, tracked_ok = 0;
   const long before = naneye::test::heap_allocations();
   for (int round = 0; round < 2; ++round) {
     for (const Frame& f : frames) {
-      const bool ok = det.detect_full(test::view_of(f.image, f.bayer), res);
+      const bool ok = det.detect_full(sim::raw_view(f.image, f.bayer), res);
       found += ok;
       expected += f.board_in_view;
-      if (ok) tracked_ok += det.detect(test::view_of(f.image, f.bayer), &res, tracked) && tracked.tracked;
+      if (ok) tracked_ok += det.detect(sim::raw_view(f.image, f.bayer), &res, tracked) && tracked.tracked;
     }
   }
   const long allocations = naneye::test::heap_allocations() - before;
@@ -73,9 +73,9 @@ TEST(CornerAllocation, CounterSeesTheOpenCVFallback) {
   CornerDetector det(test::paper_d3().left, s);
   const cv::Mat empty = test::render(false, sim::Pose{}, 740, test::Scene::no_board).left;
   CornerResult res;
-  det.detect_full(test::view_of(empty, false), res);
+  det.detect_full(sim::raw_view(empty, false), res);
   const long before = naneye::test::heap_allocations();
-  EXPECT_FALSE(det.detect_full(test::view_of(empty, false), res));
+  EXPECT_FALSE(det.detect_full(sim::raw_view(empty, false), res));
   EXPECT_GT(naneye::test::heap_allocations() - before, 0);
 }
 

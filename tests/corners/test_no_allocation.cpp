@@ -30,14 +30,14 @@ TEST(CornerAllocation, TrackedFramesAllocateNothing) {
     pose.R = Eigen::AngleAxisd(0.005, Eigen::Vector3d(1, 0.4, 0).normalized()).toRotationMatrix() * pose.R;
   }
   CornerResult a, b;
-  ASSERT_TRUE(det.detect_full(test::view_of(frames[0], false), a)) << to_string(det.last_failure());
-  ASSERT_TRUE(det.detect(test::view_of(frames[1], true), &a, b));  // warm-up
+  ASSERT_TRUE(det.detect_full(sim::raw_view(frames[0], false), a)) << to_string(det.last_failure());
+  ASSERT_TRUE(det.detect(sim::raw_view(frames[1], true), &a, b));  // warm-up
   int tracked = 0;
   const long before = naneye::test::heap_allocations();
   for (int f = 2; f < 6; ++f) {
     CornerResult& prev = f % 2 == 0 ? b : a;
     CornerResult& now = f % 2 == 0 ? a : b;
-    const bool found = det.detect(test::view_of(frames[static_cast<std::size_t>(f)], f % 2 == 1), &prev, now);
+    const bool found = det.detect(sim::raw_view(frames[static_cast<std::size_t>(f)], f % 2 == 1), &prev, now);
     tracked += found && now.tracked;
   }
   const long allocations = naneye::test::heap_allocations() - before;

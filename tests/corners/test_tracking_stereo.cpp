@@ -21,7 +21,7 @@ TEST(CornerTracking, TrackedEqualsFullSearch) {
   for (int f = 0; f < 5; ++f) {
     const bool bayer = f >= 3;
     const sim::RenderedPair p = test::render(bayer, pose, 400 + static_cast<std::uint64_t>(f));
-    const RawImageView v = test::view_of(p.left, bayer);
+    const RawImageView v = sim::raw_view(p.left, bayer);
     ASSERT_TRUE(det.detect_full(v, full)) << "frame " << f;
     if (f > 0) {
       ASSERT_TRUE(det.detect(v, &prev, tracked)) << "frame " << f;
@@ -61,10 +61,10 @@ TEST(CornerTracking, LargeJumpFallsBackToFullSearch) {
   sim::Pose pose = test::random_pose(rng, 68, 72, 10, 0);
   const sim::RenderedPair a = test::render(false, pose, 1);
   CornerResult prev, res;
-  ASSERT_TRUE(det.detect_full(test::view_of(a.left, false), prev)) << to_string(det.last_failure());
+  ASSERT_TRUE(det.detect_full(sim::raw_view(a.left, false), prev)) << to_string(det.last_failure());
   pose.t += pose.R.col(0) * 5.99;
   const sim::RenderedPair b = test::render(false, pose, 2);
-  ASSERT_TRUE(det.detect(test::view_of(b.left, false), &prev, res));
+  ASSERT_TRUE(det.detect(sim::raw_view(b.left, false), &prev, res));
   EXPECT_FALSE(res.tracked);
   EXPECT_LE(test::max_error(res, b.truth.left_px, test::best_turn(res, b.truth.left_px)), 0.25);
 }
@@ -91,8 +91,8 @@ TEST(CornerStereo, SameIdsInBothEyes) {
       continue;
     }
     CornerResult rl, rr;
-    ASSERT_TRUE(left.detect_full(test::view_of(p.left, bayer), rl)) << k;
-    ASSERT_TRUE(right.detect_full(test::view_of(p.right, bayer), rr)) << k;
+    ASSERT_TRUE(left.detect_full(sim::raw_view(p.left, bayer), rl)) << k;
+    ASSERT_TRUE(right.detect_full(sim::raw_view(p.right, bayer), rr)) << k;
     const StereoIdCheck check = resolve_stereo_ids(rig, rl, rr);
     ASSERT_TRUE(check.status == StereoIdStatus::consistent || check.status == StereoIdStatus::flipped_right)
         << to_string(check.status);
@@ -116,8 +116,8 @@ TEST(CornerStereo, TurnedNumberingIsRepairedAndMismatchRefused) {
   std::mt19937_64 rng(32);
   const sim::RenderedPair p = test::render(false, test::random_pose(rng), 9);
   CornerResult rl, rr;
-  ASSERT_TRUE(left.detect_full(test::view_of(p.left, false), rl));
-  ASSERT_TRUE(right.detect_full(test::view_of(p.right, false), rr));
+  ASSERT_TRUE(left.detect_full(sim::raw_view(p.left, false), rl));
+  ASSERT_TRUE(right.detect_full(sim::raw_view(p.right, false), rr));
   const CornerResult original = rr;
   turn_numbering(rr);
   const StereoIdCheck check = resolve_stereo_ids(rig, rl, rr);
@@ -128,7 +128,7 @@ TEST(CornerStereo, TurnedNumberingIsRepairedAndMismatchRefused) {
   // The right eye's detection of another pose: neither numbering fits the epipolar geometry.
   const sim::RenderedPair q = test::render(false, test::random_pose(rng), 10);
   CornerResult other;
-  ASSERT_TRUE(right.detect_full(test::view_of(q.right, false), other));
+  ASSERT_TRUE(right.detect_full(sim::raw_view(q.right, false), other));
   EXPECT_EQ(resolve_stereo_ids(rig, rl, other).status, StereoIdStatus::ambiguous);
 }
 

@@ -53,7 +53,7 @@ TEST(Allocations, ReconstructPairAllocatesNothingPerPair) {
   int pairs = 0;
   long worst = 0;
   for (std::size_t k = 0; k < seq.size(); ++k) {
-    ASSERT_EQ(rec.process(test::view_of(seq[k].left, false), test::view_of(seq[k].right, false), out),
+    ASSERT_EQ(rec.process(sim::raw_view(seq[k].left, false), sim::raw_view(seq[k].right, false), out),
               recon::PairOutcome::board_found)
         << "pair " << k;
     const int n = observations(rec, obs);
@@ -83,7 +83,7 @@ TEST(Allocations, ProcessAllocatesNothingPerTrackedPair) {
   long total = 0;
   for (std::size_t k = 0; k < seq.size(); ++k) {
     const long before = naneye::test::heap_allocations();
-    ASSERT_EQ(rec.process(test::view_of(seq[k].left, false), test::view_of(seq[k].right, false), out),
+    ASSERT_EQ(rec.process(sim::raw_view(seq[k].left, false), sim::raw_view(seq[k].right, false), out),
               recon::PairOutcome::board_found);
     if (k == 0) continue;
     EXPECT_TRUE(rec.left_corners().tracked && rec.right_corners().tracked) << "pair " << k;

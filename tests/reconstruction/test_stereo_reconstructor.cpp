@@ -31,7 +31,7 @@ RunStats run(bool bayer, int pairs, std::uint64_t seed) {
                          test::fully_in_view(img.truth.right_px, img.truth.right_imaged);
     ++r.pairs;
     r.in_view += in_view;
-    const auto outcome = rec.process(test::view_of(img.left, bayer), test::view_of(img.right, bayer), out);
+    const auto outcome = rec.process(sim::raw_view(img.left, bayer), sim::raw_view(img.right, bayer), out);
     if (outcome != recon::PairOutcome::board_found) continue;
     ++r.found;
     for (int i = 0; i < out.point_count; ++i) {
@@ -89,7 +89,7 @@ TEST(StereoReconstructor, NoBoardNoResult) {
   recon::PairResult out;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const auto img = test::render(false, sim::Pose{}, seed, test::Scene::no_board);
-    EXPECT_EQ(rec.process(test::view_of(img.left, false), test::view_of(img.right, false), out),
+    EXPECT_EQ(rec.process(sim::raw_view(img.left, false), sim::raw_view(img.right, false), out),
               recon::PairOutcome::no_board_left);
     EXPECT_FALSE(out.board_found);
     EXPECT_EQ(out.point_count, 0);

@@ -17,15 +17,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-recon::RawImageView view_of(const cv::Mat& m) {
-  recon::RawImageView v;
-  v.data = m.ptr<std::uint16_t>();
-  v.width = m.cols;
-  v.height = m.rows;
-  v.stride = static_cast<int>(m.step1());
-  return v;
-}
-
 // The detector numbers a 9 x 7 board up to a 180-degree turn (it looks the same turned): match its ids
 // to the truth's by the left pixels, as they are or reversed.
 bool ids_reversed(const recon::PairResult& r, const std::vector<Eigen::Vector2d>& truth_left) {
@@ -46,7 +37,8 @@ void run_opencv(const Dataset& d, const cv::Mat& left, const cv::Mat& right, Vie
   o.rows = d.board.rows;
   o.cols = d.board.cols;
   o.square_mm = d.board.square_mm;
-  const recon::OpenCvPathResult r = recon::opencv_reconstruct_pair(d.rig, view_of(left), view_of(right), o);
+  const recon::OpenCvPathResult r =
+      recon::opencv_reconstruct_pair(d.rig, sim::raw_view(left), sim::raw_view(right), o);
   const std::size_t n = v.truth_left.size();
   v.opencv_left.assign(n, Eigen::Vector2d::Constant(kNaN));
   v.opencv_right = v.opencv_left;
@@ -101,7 +93,7 @@ Dataset render_dataset(const sim::Preset& preset, int views, std::uint64_t seed)
     v.right_px = v.left_px;
     v.detected.assign(static_cast<std::size_t>(n), false);
     for (auto& p : v.points) p.assign(static_cast<std::size_t>(n), Eigen::Vector3d::Constant(kNaN));
-    const auto outcome = reconstructor.process(view_of(img.left), view_of(img.right), *result);
+    const auto outcome = reconstructor.process(sim::raw_view(img.left), sim::raw_view(img.right), *result);
     v.found = outcome == recon::PairOutcome::board_found && result->point_count == n;
     if (v.found) {
       const bool rev = ids_reversed(*result, v.truth_left);

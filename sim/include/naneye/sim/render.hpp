@@ -18,6 +18,7 @@
 #include <random>
 #include <vector>
 
+#include "naneye/recon/corners.hpp"
 #include "naneye/recon/rig.hpp"
 #include "naneye/sim/scene.hpp"
 #include "naneye/sim/sensor.hpp"
@@ -48,6 +49,9 @@ struct RenderedPair {
   cv::Mat left, right;  // CV_16UC1, 250 x 250, 10-bit values, reference pixels and padding included
   Truth truth;
 };
+
+// One rendered image as the detector reads it (no copy: the view borrows `image`'s pixels).
+recon::RawImageView raw_view(const cv::Mat& image, bool bayer = false);
 
 // Corners of `board` at `pose`, projected by both cameras of `rig`.
 Truth compute_truth(const recon::StereoRig& rig, const BoardGeometry& board, const Pose& pose,
