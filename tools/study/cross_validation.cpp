@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 
+#include "format.hpp"
 #include "naneye/recon/calibrate.hpp"
 #include "paper_tables.hpp"
 #include "study.hpp"
@@ -18,25 +19,6 @@ namespace naneye::tools::study {
 namespace {
 
 constexpr int kSplits = 3, kTrainViews = 10;
-
-std::string n3(double v, int decimals = 3) {
-  if (!std::isfinite(v)) return "-";
-  char buf[48];
-  if (v != 0 && std::abs(v) < 1e-3)
-    std::snprintf(buf, sizeof buf, "%.2e", v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-std::string pdr(double P, double D, double R) {
-  return n3(P) + " / " + n3(D) + " / " + n3(R);
-}
-std::string pdr(const Scores& s) {
-  return pdr(s.P, s.D, s.R);
-}
-std::string pdr(const paper::PDR& p) {
-  return pdr(p.P, p.D, p.R);
-}
 
 recon::CalibrationView calibration_view(const Dataset& d, const View& v) {
   recon::CalibrationView c;
@@ -144,19 +126,19 @@ std::string cross_validation_section(const StudyRun& run, const Dataset& d3) {
         << (mean ? "mean of " + std::to_string(held.views.size())
                  : std::string(1, static_cast<char>('A' + k)) + std::to_string(s + 1))
         << " | " << (mean ? "-" : pdr(paper::kCrossBaseline[pi])) << " | " << pdr(sc[poly_dlt]) << " | "
-        << n3(sc[poly_dlt].E) << " | " << (mean ? "-" : pdr(paper::kCrossDivision[pi])) << " | "
-        << pdr(sc[div_tri]) << " | " << n3(sc[div_tri].E) << " | "
+        << num(sc[poly_dlt].E) << " | " << (mean ? "-" : pdr(paper::kCrossDivision[pi])) << " | "
+        << pdr(sc[div_tri]) << " | " << num(sc[div_tri].E) << " | "
         << (mean ? "-" : pdr(paper::kCrossNormalized[pi])) << " | " << pdr(sc[norm_tri]) << " | "
-        << n3(sc[norm_tri].E) << " |\n";
+        << num(sc[norm_tri].E) << " |\n";
       if (mean) break;
     }
-    calib_rows << "| Test " << s + 1 << " | " << n3(cal.rms_px, 4) << " |";
+    calib_rows << "| Test " << s + 1 << " | " << num(cal.rms_px, 4) << " |";
     for (const char* p : {"left.fx", "left.cx", "left.k1", "left.k2", "left.k3", "right.k3", "T.x", "T.z"}) {
       const recon::ParameterEstimate* e = cal.find(p);
       const double t = truth_value(d3.rig, p);
       calib_rows << " "
-                 << (e ? n3(e->value, 3) + " ± " + n3(e->sigma, 3) + " (" + n3((e->value - t) / e->sigma, 1) +
-                             " σ)"
+                 << (e ? num(e->value, 3) + " ± " + num(e->sigma, 3) + " (" +
+                             num((e->value - t) / e->sigma, 1) + " σ)"
                        : "-")
                  << " |";
     }
@@ -169,7 +151,7 @@ std::string cross_validation_section(const StudyRun& run, const Dataset& d3) {
        "|---|---|---|---|---|---|---|---|---|---|\n"
     << calib_rows.str() << "| truth |  |";
   for (const char* p : {"left.fx", "left.cx", "left.k1", "left.k2", "left.k3", "right.k3", "T.x", "T.z"})
-    o << " " << n3(truth_value(d3.rig, p), 3) << " |";
+    o << " " << num(truth_value(d3.rig, p), 3) << " |";
   o << "\n\n";
 
   const recon::OddEvenValidation oe = recon::cross_validate_odd_even(all, d3.board, cs);
@@ -182,14 +164,14 @@ std::string cross_validation_section(const StudyRun& run, const Dataset& d3) {
        "|odd - even| is about sqrt(sigma_odd^2 + sigma_even^2) (ratio ~ 1 on average; RMS of the ratio over "
        "the "
        "free parameters: "
-    << n3(oe.ratio_rms, 2)
+    << num(oe.ratio_rms, 2)
     << ").\n\n| parameter | truth | odd | even | odd - even | combined sigma | ratio |\n"
        "|---|---|---|---|---|---|---|\n";
   for (const auto& p : oe.parameters) {
     if (p.fixed) continue;
-    o << "| " << p.name << " | " << n3(truth_value(d3.rig, p.name), 4) << " | " << n3(p.odd, 4) << " ± "
-      << n3(p.odd_sigma, 4) << " | " << n3(p.even, 4) << " ± " << n3(p.even_sigma, 4) << " | "
-      << n3(p.difference, 4) << " | " << n3(p.combined_sigma, 4) << " | " << n3(p.ratio, 2) << " |\n";
+    o << "| " << p.name << " | " << num(truth_value(d3.rig, p.name), 4) << " | " << num(p.odd, 4) << " ± "
+      << num(p.odd_sigma, 4) << " | " << num(p.even, 4) << " ± " << num(p.even_sigma, 4) << " | "
+      << num(p.difference, 4) << " | " << num(p.combined_sigma, 4) << " | " << num(p.ratio, 2) << " |\n";
   }
   o << "\n";
   return o.str();

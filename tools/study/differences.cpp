@@ -3,22 +3,13 @@
 #include <cstdio>
 #include <sstream>
 
+#include "format.hpp"
 #include "naneye/recon/division_fit.hpp"
 #include "paper_tables.hpp"
 #include "study.hpp"
 
 namespace naneye::tools::study {
 namespace {
-
-std::string f(double v, int decimals = 2) {
-  char buf[48];
-  if (!std::isfinite(v)) return "-";
-  if (v != 0 && std::abs(v) < 1e-3)
-    std::snprintf(buf, sizeof buf, "%.2e", v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 // RMS corner error of naneye's detector or of the OpenCV path, both eyes.
 double corner_rms(const Dataset& d, bool opencv_path) {
@@ -69,65 +60,66 @@ std::string differences_section(const StudyRun& run) {
        "exact by construction and no calibration error enters the main tables (the paper's did; the "
        "cross-validation section is where calibration error shows). What is left is corner noise: "
        "naneye's detector measures the rendered corners to "
-    << f(corner_rms(*d3, false), 3) << " px RMS on Dataset 3, the OpenCV path's detector to "
-    << f(corner_rms(*d3, true), 3)
+    << num(corner_rms(*d3, false), 3) << " px RMS on Dataset 3, the OpenCV path's detector to "
+    << num(corner_rms(*d3, true), 3)
     << " px. Renders lack much of what real images add (print flatness, defocus across a tilted board, "
        "stray light, the sensor's fixed-pattern noise), and the paper used a classic corner finder. It gives "
        "no "
        "corner accuracy, but its figures say ~0.2 px: with 0.2 px of noise added to our corners the same "
        "views give P / D / R "
-    << f(noisy ? noisy->mean[poly_dlt].P : NAN) << " / " << f(noisy ? noisy->mean[poly_dlt].D : NAN) << " / "
-    << f(noisy ? noisy->mean[poly_dlt].R : NAN, 3)
+    << num(noisy ? noisy->mean[poly_dlt].P : NAN, 2) << " / " << num(noisy ? noisy->mean[poly_dlt].D : NAN, 2)
+    << " / " << num(noisy ? noisy->mean[poly_dlt].R : NAN, 3)
     << " against the paper's 3.30 / 2.75 / 0.16 (mean of its five baseline planes).\n";
   o << "* **P and D of the baseline.** With naneye's corners the polynomial triangulation gives P "
-    << f(dlt.P) << " mm, D " << f(dlt.D) << " mm (DLT, the paper's recipe) and P " << f(poly.P) << ", D "
-    << f(poly.D)
+    << num(dlt.P, 2) << " mm, D " << num(dlt.D, 2) << " mm (DLT, the paper's recipe) and P " << num(poly.P, 2)
+    << ", D " << num(poly.D, 2)
     << " mm (our refined triangulation), some 25 times below the paper's: at 70 mm a 1 mm baseline turns a "
        "pixel of disparity into ~21 mm of depth (paper Eq. 2), so P and D measure the corner noise through "
        "that lever, linearly, and much less the model. The paper's own conclusion (\"reconstruction with "
        "higher accuracy requires ... jointly considering the radial distortion and the small baseline\") is "
        "what the board-pose rows do: fitting the known board to both eyes brings the 3D error from "
-    << f(poly.E) << " mm (triangulated) to " << f(board.E, 4)
-    << " mm (with 0.2 px corners: " << f(noisy ? noisy->mean[poly_tri].E : NAN) << " mm to "
-    << f(noisy ? noisy->mean[poly_board].E : NAN, 3) << " mm).\n";
+    << num(poly.E, 2) << " mm (triangulated) to " << num(board.E, 4)
+    << " mm (with 0.2 px corners: " << num(noisy ? noisy->mean[poly_tri].E : NAN, 2) << " mm to "
+    << num(noisy ? noisy->mean[poly_board].E : NAN, 3) << " mm).\n";
   o << "* **Division model, lambda from homographies.** With a ~1 mm baseline the homography between the two "
        "views of a board is close to the identity and a distortion common to both eyes cancels in it, so "
        "lambda is weakly observable (docs/division-model.md): the homographies give lambda = "
-    << f(d3->lambdas_pixel.lambda_left) << " / " << f(d3->lambdas_pixel.lambda_right)
-    << " px^-2 where the least-squares fit of one parameter to the true cameras is " << f(fit_l.lambda)
-    << " / " << f(fit_r.lambda) << " px^-2, and even that best fit misses the polynomial by "
-    << f(fit_l.max_px, 1) << " / " << f(fit_r.max_px, 1)
+    << num(d3->lambdas_pixel.lambda_left, 2) << " / " << num(d3->lambdas_pixel.lambda_right, 2)
+    << " px^-2 where the least-squares fit of one parameter to the true cameras is " << num(fit_l.lambda, 2)
+    << " / " << num(fit_r.lambda, 2) << " px^-2, and even that best fit misses the polynomial by "
+    << num(fit_l.max_px, 1) << " / " << num(fit_r.max_px, 1)
     << " px at the image edge (plot below). The paper saw the same weakness from the other side (\"the "
        "division model with a single coefficient can not correctly model this level of distortion\"). Here "
        "the division paths give E "
-    << f(div.E) << " mm (triangulation) against " << f(poly.E)
+    << num(div.E, 2) << " mm (triangulation) against " << num(poly.E, 2)
     << " mm for the polynomial with the same corners. With 0.2 px corners the difference drowns in the noise "
        "(E "
-    << f(noisy ? noisy->mean[div_tri].E : NAN) << " against " << f(noisy ? noisy->mean[poly_dlt].E : NAN)
+    << num(noisy ? noisy->mean[div_tri].E : NAN, 2) << " against "
+    << num(noisy ? noisy->mean[poly_dlt].E : NAN, 2)
     << " mm), as the paper's P and D for the division model stayed within a factor ~1.5 of its baseline. Its "
        "R, "
        "though, was 8 times worse for the division model (1.28 against 0.16 px on average); ours is not ("
-    << f(noisy ? noisy->mean[div_tri].R : NAN, 3) << " against "
-    << f(noisy ? noisy->mean[poly_dlt].R : NAN, 3)
+    << num(noisy ? noisy->mean[div_tri].R : NAN, 3) << " against "
+    << num(noisy ? noisy->mean[poly_dlt].R : NAN, 3)
     << " px, each reprojected with its own model). We do not know how the paper reprojected the division "
        "results.\n";
   o << "* **The OpenCV path.** The reconstruction a user would write with OpenCV (recon/opencv_path.hpp) "
        "gives E "
-    << f(d3->mean[opencv].E) << " mm on Dataset 3, against " << f(poly.E)
+    << num(d3->mean[opencv].E, 2) << " mm on Dataset 3, against " << num(poly.E, 2)
     << " mm for naneye's triangulation on the same renders: the difference is the corners (above). It found "
     << d3->opencv_found << " of " << d3->views.size() << " boards, naneye's detector " << d3->found
     << " (a view where ours fails is missing from our rows, not counted as an error).\n";
   o << "* **Plane sweep = triangulation.** As in the paper (\"the plane-sweeping approach (as it was "
        "applied) "
        "is equivalent to triangulation\"): mean P / D / R "
-    << f(div.P) << " / " << f(div.D) << " / " << f(div.R, 3) << " against " << f(sweep.P) << " / "
-    << f(sweep.D) << " / " << f(sweep.R, 3) << ".\n";
+    << num(div.P, 2) << " / " << num(div.D, 2) << " / " << num(div.R, 3) << " against " << num(sweep.P, 2)
+    << " / " << num(sweep.D, 2) << " / " << num(sweep.R, 3) << ".\n";
   o << "* **The paper's blow-ups.** Its Plane 5 with normalized coordinates reached P = 833.587 mm, "
        "D = 1482 mm (and 26.6 / 42.8 mm directly with Eq. 10): a board reaching the image corners, where "
        "one parameter no longer follows the lens. Our worst view gives P "
-    << f(worst(*d3, norm_tri, &Scores::P)) << " mm, D " << f(worst(*d3, norm_tri, &Scores::D))
-    << " mm (normalized + DLT) and P " << f(worst(*d3, norm_direct, &Scores::P)) << ", D "
-    << f(worst(*d3, norm_direct, &Scores::D))
+    << num(worst(*d3, norm_tri, &Scores::P), 2) << " mm, D " << num(worst(*d3, norm_tri, &Scores::D), 2)
+    << " mm (normalized + DLT) and P " << num(worst(*d3, norm_direct, &Scores::P), 2) << ", D "
+    << num(worst(*d3, norm_direct, &Scores::D), 2)
     << " mm (Eq. 10): our renders keep every corner inside both images and inside the model's fold (the "
        "simulator's full-view poses), the paper's boards did not have to.\n";
   if (!run.six.empty()) {
@@ -135,10 +127,10 @@ std::string differences_section(const StudyRun& run) {
     o << "* **The six-point comparison and its 57 px R.** The paper does not say where its six points were. "
          "Near the axis the two eyes distort alike and the division model errs by micrometres; in the outer "
          "field ("
-      << f(outer.offset_px, 0) << " px off-centre) D reaches " << f(outer.rows[div_tri].D)
+      << num(outer.offset_px, 0) << " px off-centre) D reaches " << num(outer.rows[div_tri].D, 2)
       << " mm, of the paper's 9.3 mm. Its R of 57-59 px is not reproduced: ours is "
-      << f(outer.rows[div_tri].R_own) << " px with the method's own model and "
-      << f(outer.rows[div_tri].R_true)
+      << num(outer.rows[div_tri].R_own, 2) << " px with the method's own model and "
+      << num(outer.rows[div_tri].R_true, 2)
       << " px against the true camera. An R of 57 px is a quarter of the image; it would need a reprojection "
          "that mixes models (e.g. undistorted pinhole pixels compared with distorted ones); we do not know "
          "what "
@@ -147,7 +139,7 @@ std::string differences_section(const StudyRun& run) {
   }
   o << "* **Centre of distortion.** The paper's image-centre variant assumes the distortion is centred at "
        "(124.5, 124.5); the Dataset 3 left principal point lies "
-    << f((Eigen::Vector2d(d3->rig.left.cx(), d3->rig.left.cy()) - Eigen::Vector2d(124.5, 124.5)).norm(), 1)
+    << num((Eigen::Vector2d(d3->rig.left.cx(), d3->rig.left.cy()) - Eigen::Vector2d(124.5, 124.5)).norm(), 1)
     << " px away. In our renders the principal point *is* the centre of distortion, so the normalized "
        "variant is the better-centred one (its best fit misses by less, docs/division-model.md).\n";
   o << "* **Which planes.** The paper shows 5 of its 19 images per table; we show the first 5 found views "
@@ -160,8 +152,8 @@ std::string differences_section(const StudyRun& run) {
     if (d.preset.name != "paper-d1") continue;
     o << " Their calibrations have k3 = 0, a profile one parameter can follow: on Dataset 1 the normalized "
          "division model comes close to the polynomial (E "
-      << f(d.mean[norm_tri].E, 3) << " against " << f(d.mean[poly_tri].E, 3)
-      << " mm), the image-centred one does not (" << f(d.mean[div_tri].E, 3)
+      << num(d.mean[norm_tri].E, 3) << " against " << num(d.mean[poly_tri].E, 3)
+      << " mm), the image-centred one does not (" << num(d.mean[div_tri].E, 3)
       << " mm): there the centre of distortion matters more than the number of parameters.";
   }
   o << "\n\n";

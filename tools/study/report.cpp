@@ -5,32 +5,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "format.hpp"
 #include "naneye/recon/division_fit.hpp"
 #include "paper_tables.hpp"
 #include "study.hpp"
 
 namespace naneye::tools::study {
 namespace {
-
-std::string num(double v, int decimals = 3) {
-  if (!std::isfinite(v)) return "-";
-  char buf[48];
-  if (std::abs(v) >= 1e5 || (v != 0 && std::abs(v) < 1e-3))
-    std::snprintf(buf, sizeof buf, "%.2e", v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-std::string pdr(double P, double D, double R) {
-  return num(P) + " / " + num(D) + " / " + num(R);
-}
-std::string pdr(const Scores& s) {
-  return pdr(s.P, s.D, s.R);
-}
-std::string pdr(const paper::PDR& p) {
-  return pdr(p.P, p.D, p.R);
-}
 
 const Dataset* find_set(const StudyRun& run, const std::string& name) {
   for (const Dataset& d : run.sets) {
