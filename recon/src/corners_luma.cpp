@@ -37,7 +37,15 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
   // of their 8 same-site neighbours. A defect lies beyond all of them by more than the threshold: a
   // blurred board has no such isolated extreme (an edge or corner pixel lies between its neighbours),
   // and the default threshold is ~7 sigma of the shot noise on a white square.
+  using Row = Eigen::Map<const Eigen::ArrayXf>;
+  const auto inner = static_cast<Eigen::Index>(w - 2 * step);
   for (int r = step; r < h - step; ++r) {
+    // A defect lies beyond its left and right neighbours: one SIMD pass over the row rules out
+    // almost every row, the scalar test below runs only where that pass found a candidate.
+    const float* p = f + r * w;
+    const Row left(p, inner), mid(p + step, inner), right(p + 2 * step, inner);
+    const float beyond = (mid - left.max(right)).max(left.min(right) - mid).maxCoeff();
+    if (!(beyond > defect_threshold_dn)) continue;
     for (int c = step; c < w - step; ++c) {
       const float v = f[r * w + c];
       // A defect lies beyond every neighbour, so one neighbour within the threshold clears it.
