@@ -233,6 +233,18 @@ void BM_NoBoard(benchmark::State& state, bool opencv_fallback) {
   state.counters["found"] = found;
 }
 
+// The first step of every detection: raw frame -> float luminance with the defect-pixel repair
+// (mono), plus the 3x3 binomial (Bayer).
+void BM_Luminance(benchmark::State& state, bool bayer) {
+  const auto& eyes = dataset();
+  const Eye& e = eyes[bayer ? 2 : 0];
+  std::vector<float> out(250 * 250), scratch(250 * 250);
+  for (auto _ : state) {
+    recon::raw_to_luminance(sim::raw_view(e.now, e.bayer), out.data(), scratch.data());
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+
 // Each run covers the 48 eyes at least once (the tallies need all of them).
 BENCHMARK_CAPTURE(BM_Ours, full_search, false)->Unit(benchmark::kMillisecond)->Iterations(96);
 BENCHMARK_CAPTURE(BM_Ours, tracked, true)->Unit(benchmark::kMillisecond)->Iterations(480);
@@ -242,6 +254,8 @@ BENCHMARK_CAPTURE(BM_OpenCV, findChessboardCorners_cornerSubPix, false)
 BENCHMARK_CAPTURE(BM_OpenCV, findChessboardCornersSB, true)->Unit(benchmark::kMillisecond)->Iterations(96);
 BENCHMARK_CAPTURE(BM_CoarseGrid, ours, false)->Unit(benchmark::kMillisecond)->Iterations(480);
 BENCHMARK_CAPTURE(BM_CoarseGrid, opencv_before, true)->Unit(benchmark::kMillisecond)->Iterations(96);
+BENCHMARK_CAPTURE(BM_Luminance, mono, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Luminance, bayer, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_NoBoard, ours, false)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK_CAPTURE(BM_NoBoard, with_opencv_fallback, true)->Unit(benchmark::kMillisecond)->Iterations(80);
 

@@ -9,6 +9,7 @@ namespace naneye::recon {
 namespace {
 
 constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
+constexpr double kTrustStepPx = 0.05;
 using Arr = FastFitScratch::Arr;
 using Vec = Eigen::Matrix<double, kParams, 1>;
 using MatP = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kParams, kParams>;
@@ -165,7 +166,8 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
 
 // Starts right after init_linear (shape() done at p); returns the iterations, `cost` the final cost.
 int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active, int n_active,
-                        int max_iterations, double tolerance_px, double lambda, double& cost) {
+                        int max_iterations, double tolerance_px, double trust_px, double lambda,
+                        double& cost) {
   MatP JtJ, JtJ2;
   VecP Jtr, Jtr2;
   cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr, true);
@@ -178,10 +180,17 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
     Vec cand = p;
     for (int j = 0; j < n_active; ++j) cand[active[static_cast<std::size_t>(j)]] += step[j];
     if (!(cand[4] > 0.05)) cand[4] = 0.05;
-    // A Gauss-Newton step this small is taken without checking it (its cost change is below the
-    // float noise of the sum): one model evaluation less per fit.
-    if (lambda <= 1e-3 && step.head<2>().norm() < tolerance_px) {
+    // A short Gauss-Newton step is taken without evaluating the model at its end: from a start
+    // (position and blur) within kTrustStepPx of the optimum Gauss-Newton lands
+    // within ~1e-3 px of it, far below the corner noise (measured on bench_corners' 48 eyes: RMS
+    // against the truth 0.01438 px this way, 0.01442 px iterating to 1e-3 px, 1.5x faster). The
+    // cost is the linear model's prediction, cost + 2 s.Jtr + s' JtJ s.
+    double blur_step = 0;  // the other nonlinear parameter: a start with a wrong blur needs iterations
+    for (int j = 0; j < n_active; ++j)
+      if (active[static_cast<std::size_t>(j)] == 4) blur_step = std::abs(step[j]);
+    if (lambda <= 1e-3 && step.head<2>().norm() < std::max(trust_px, tolerance_px) && blur_step < trust_px) {
       p = cand;
+      cost = std::max(0.0, cost + 2.0 * step.dot(Jtr) + step.dot(JtJ * step));
       break;
     }
     const double c2 = evaluate(w, n, cand, &active, n_active, &JtJ2, &Jtr2);
@@ -282,8 +291,9 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   // With the edges fixed the problem is nearly linear around a close start: (almost) Gauss-Newton.
   double cost = 0;
   out.iterations =
-      edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, 1e-6, cost)
-            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 1e-3, cost);
+      edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, kTrustStepPx, 1e-6,
+                                  cost)
+            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 0.0, 1e-3, cost);
   const double used = static_cast<double>(w.wt.head(n).sum());
   out.theta1 = p[2];
   out.theta2 = p[3];

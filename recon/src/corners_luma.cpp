@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <opencv2/core.hpp>
 
 #include "naneye/recon/corners.hpp"
 
@@ -26,41 +27,63 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
     return r;
   };
   float* f = bayer ? scratch : out;
+  const int direct = std::min(col_last + 1, w);  // columns read in place
+  if (row_last >= row_first && direct > 0) {
+    // OpenCV's SIMD conversion for the usable block (headers on our buffers: no allocation).
+    const cv::Mat src(row_last - row_first + 1, direct, CV_16UC1,
+                      const_cast<std::uint16_t*>(im.data + static_cast<std::size_t>(row_first) * im.stride),
+                      static_cast<std::size_t>(im.stride) * sizeof(std::uint16_t));
+    cv::Mat dst(src.rows, direct, CV_32FC1, f + row_first * w, static_cast<std::size_t>(w) * sizeof(float));
+    src.convertTo(dst, CV_32F);
+  }
   for (int r = 0; r < h; ++r) {
-    const std::uint16_t* src = im.data + static_cast<std::size_t>(src_row(r)) * im.stride;
     float* dst = f + r * w;
-    const int direct = std::min(col_last + 1, w);  // columns read in place (no branch: vectorises)
-    for (int c = 0; c < direct; ++c) dst[c] = static_cast<float>(src[c]);
-    for (int c = direct; c < w; ++c) dst[c] = static_cast<float>(src[src_col(c)]);
+    if (r < row_first || r > row_last) {
+      const std::uint16_t* src = im.data + static_cast<std::size_t>(src_row(r)) * im.stride;
+      for (int c = 0; c < direct; ++c) dst[c] = static_cast<float>(src[c]);
+    }
+    for (int c = direct; c < w; ++c) dst[c] = f[src_row(r) * w + src_col(c)];
   }
   // Defect pixels (hot, dead, stuck; the datasheet allows < 10 per sensor) are replaced by the median
   // of their 8 same-site neighbours. A defect lies beyond all of them by more than the threshold: a
   // blurred board has no such isolated extreme (an edge or corner pixel lies between its neighbours),
   // and the default threshold is ~7 sigma of the shot noise on a white square.
-  using Row = Eigen::Map<const Eigen::ArrayXf>;
-  const auto inner = static_cast<Eigen::Index>(w - 2 * step);
-  for (int r = step; r < h - step; ++r) {
-    // A defect lies beyond its left and right neighbours: one SIMD pass over the row rules out
-    // almost every row, the scalar test below runs only where that pass found a candidate.
-    const float* p = f + r * w;
-    const Row left(p, inner), mid(p + step, inner), right(p + 2 * step, inner);
-    const float beyond = (mid - left.max(right)).max(left.min(right) - mid).maxCoeff();
-    if (!(beyond > defect_threshold_dn)) continue;
-    for (int c = step; c < w - step; ++c) {
-      const float v = f[r * w + c];
-      // A defect lies beyond every neighbour, so one neighbour within the threshold clears it.
-      if (std::abs(v - f[r * w + c - step]) <= defect_threshold_dn) continue;
-      std::array<float, 8> nb;
-      std::size_t k = 0;
-      for (int dr = -step; dr <= step; dr += step) {
-        for (int dc = -step; dc <= step; dc += step) {
-          if (dr != 0 || dc != 0) nb[k++] = f[(r + dr) * w + c + dc];
-        }
+  auto repair = [&](int r, int c) {
+    const float v = f[r * w + c];
+    std::array<float, 8> nb;
+    std::size_t k = 0;
+    for (int dr = -step; dr <= step; dr += step) {
+      for (int dc = -step; dc <= step; dc += step) {
+        if (dr != 0 || dc != 0) nb[k++] = f[(r + dr) * w + c + dc];
       }
-      const auto [mn, mx] = std::minmax_element(nb.begin(), nb.end());
-      if (v > *mx + defect_threshold_dn || v < *mn - defect_threshold_dn) {
-        std::nth_element(nb.begin(), nb.begin() + 4, nb.end());
-        f[r * w + c] = nb[4];
+    }
+    const auto [mn, mx] = std::minmax_element(nb.begin(), nb.end());
+    if (v > *mx + defect_threshold_dn || v < *mn - defect_threshold_dn) {
+      std::nth_element(nb.begin(), nb.begin() + 4, nb.end());
+      f[r * w + c] = nb[4];
+      return true;
+    }
+    return false;
+  };
+  // A defect lies beyond its left and right neighbours: a SIMD pass over a run of the row finds the
+  // candidates, the full test runs only on them (and on the pixel after a repaired one, whose left
+  // neighbour changed), in raster order like the plain rule.
+  constexpr int kRun = 64;
+  std::array<float, kRun> beyond;
+  using Run = Eigen::Map<const Eigen::Array<float, Eigen::Dynamic, 1>>;
+  for (int r = step; r < h - step; ++r) {
+    const float* p = f + r * w;
+    int force = -1;  // a column that must be tested whatever its screen value
+    for (int c0 = step; c0 < w - step; c0 += kRun) {
+      const int m = std::min(kRun, w - step - c0);
+      const Run left(p + c0 - step, m), mid(p + c0, m), right(p + c0 + step, m);
+      const auto screen = (mid - left.max(right)).max(left.min(right) - mid);
+      if (!(screen.maxCoeff() > defect_threshold_dn) && force < c0) continue;  // the usual case
+      Eigen::Map<Eigen::Array<float, Eigen::Dynamic, 1>>(beyond.data(), m) = screen;
+      for (int j = 0; j < m; ++j) {
+        const int c = c0 + j;
+        if (!(beyond[static_cast<std::size_t>(j)] > defect_threshold_dn) && c != force) continue;
+        if (repair(r, c)) force = c + step;  // its same-site right neighbour now sees the new value
       }
     }
   }
