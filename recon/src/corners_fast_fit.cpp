@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace naneye::recon {
 namespace {
@@ -237,7 +238,7 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   bool undist = map.at(cx, cy, x0f, y0f);
   for (int r = -half; r <= half && undist; ++r) {
     const unsigned char* v = map.valid_data() + (cy + r) * map.width() + cx - half;
-    for (int q = 0; q <= 2 * half; ++q) undist = undist && v[q] != 0;
+    undist = std::memchr(v, 0, static_cast<std::size_t>(2 * half + 1)) == nullptr;
   }
   const Eigen::Vector2d x0(x0f, y0f);
   Eigen::Matrix2d Jp = Eigen::Matrix2d::Identity();
@@ -249,29 +250,50 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   const Eigen::Matrix2f Jf = Jp.cast<float>();
   const Eigen::Vector2d off = init.px - Eigen::Vector2d(cx, cy);
   const float inv_half = 1.0f / static_cast<float>(half);
+  // Weight 1 up to `radius` (Chebyshev from the start), a 1 px linear taper beyond: the fit varies
+  // continuously with where it starts, so tracking and full search agree. The Chebyshev weight is
+  // separable, min(row weight, column weight), and each is positive on one contiguous run.
+  std::array<float, 2 * FastFitScratch::kMaxHalf + 1> wcol{}, wrow{};
+  auto taper = [&](int k, double o) {
+    return static_cast<float>(std::clamp(radius + 0.5 - std::abs(k - o), 0.0, 1.0));
+  };
+  int q0 = half + 1, q1 = -half - 1;
+  for (int k = -half; k <= half; ++k) {
+    const auto i = static_cast<std::size_t>(k + half);
+    wcol[i] = taper(k, off.x());
+    wrow[i] = taper(k, off.y());
+    if (wcol[i] > 0.0f) {
+      q0 = std::min(q0, k);
+      q1 = std::max(q1, k);
+    }
+  }
+  float *dx = w.dx.data(), *dy = w.dy.data(), *wyx = w.yx.data(), *wyy = w.yy.data(), *val = w.val.data(),
+        *wt = w.wt.data();
+  const float j00 = Jf(0, 0), j01 = Jf(0, 1), j10 = Jf(1, 0), j11 = Jf(1, 1);
   int n = 0;
   for (int r = -half; r <= half; ++r) {
-    const float* mx = map.x_data() + (cy + r) * map.width() + cx;
-    const float* my = map.y_data() + (cy + r) * map.width() + cx;
-    for (int q = -half; q <= half; ++q) {
-      // Weight 1 up to `radius` (Chebyshev from the start), a 1 px linear taper beyond: the fit varies
-      // continuously with where it starts, so tracking and full search agree.
-      const double cheb = std::max(std::abs(q - off.x()), std::abs(r - off.y()));
-      const double wt = std::clamp(radius + 0.5 - cheb, 0.0, 1.0);
-      if (wt <= 0.0) continue;
+    const float wr = wrow[static_cast<std::size_t>(r + half)];
+    if (!(wr > 0.0f)) continue;
+    const std::size_t row = static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(map.width()) +
+                            static_cast<std::size_t>(cx);
+    const float* mx = map.x_data() + row;
+    const float* my = map.y_data() + row;
+    const float* im = img.data + static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(img.width) +
+                      static_cast<std::size_t>(cx);
+    const float fr = static_cast<float>(r) * inv_half;
+    for (int q = q0; q <= q1; ++q, ++n) {
       float yx = static_cast<float>(q), yy = static_cast<float>(r);
       if (undist) {
         const float ux = mx[q] - x0f, uy = my[q] - y0f;
-        yx = Jf(0, 0) * ux + Jf(0, 1) * uy;
-        yy = Jf(1, 0) * ux + Jf(1, 1) * uy;
+        yx = j00 * ux + j01 * uy;
+        yy = j10 * ux + j11 * uy;
       }
-      w.dx[n] = static_cast<float>(q) * inv_half;
-      w.dy[n] = static_cast<float>(r) * inv_half;
-      w.yx[n] = yx;
-      w.yy[n] = yy;
-      w.val[n] = img.at(cy + r, cx + q);
-      w.wt[n] = static_cast<float>(wt);
-      ++n;
+      dx[n] = static_cast<float>(q) * inv_half;
+      dy[n] = fr;
+      wyx[n] = yx;
+      wyy[n] = yy;
+      val[n] = im[q];
+      wt[n] = std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
     }
   }
 
