@@ -200,6 +200,7 @@ bool CornerDetector::fit_corner(const SaddleInit& init, const EdgeDirections* ed
   if (!ok || poor) {
     SaddleInit wide = init;
     wide.sigma = 1.2;
+    wide.shading.valid = false;  // solve the linear terms afresh too
     SaddleFit retry;
     if (run(wide, radius, retry) && (!ok || retry.rms < fit.rms)) {
       fit = retry;
@@ -294,6 +295,10 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       init.theta1 = std::atan2(dc.y(), dc.x()) + kHalfPi;  // normal of the edge along the row
       init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
       init.sigma = from_previous && k.sigma_px > 0 ? k.sigma_px : 0.8;
+      if (from_previous) {
+        init.shading = k.shading;
+        init.shading_at = k.px;
+      }
       // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
       const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
       if (!fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i])) {
@@ -321,7 +326,14 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
       const Corner& k = out.corners[i];
       const double sigma = fitted[i] ? fits[i].sigma : (k.sigma_px > 0 ? k.sigma_px : 0.8);
-      const SaddleInit again{first[i], fits[i].theta1, fits[i].theta2, sigma};
+      SaddleInit again{first[i], fits[i].theta1, fits[i].theta2, sigma};
+      if (fitted[i]) {
+        again.shading = fits[i].shading;
+        again.shading_at = fits[i].px;
+      } else {
+        again.shading = k.shading;  // the previous frame's (tracking)
+        again.shading_at = k.px;
+      }
       flags[i] = 0;
       if (!fit_corner(again, &edges_[i], radius, 1e-3, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
@@ -360,6 +372,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
     k.residual = fit.rms;
     k.theta_row = fit.theta1;
     k.theta_col = fit.theta2;
+    k.shading = fit.shading;
   }
   return true;
 }

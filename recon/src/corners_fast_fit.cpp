@@ -165,13 +165,13 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
   p.segment<6>(5) = M.ldlt().solve(rhs);
 }
 
-// Starts right after init_linear (shape() done at p); returns the iterations, `cost` the final cost.
+// `shape_ready`: shape() was run at p (by init_linear). Returns the iterations, `cost` the final cost.
 int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active, int n_active,
                         int max_iterations, double tolerance_px, double trust_px, double lambda,
-                        double& cost) {
+                        bool shape_ready, double& cost) {
   MatP JtJ, JtJ2;
   VecP Jtr, Jtr2;
-  cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr, true);
+  cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr, shape_ready);
   int it = 0;
   for (; it < max_iterations; ++it) {
     MatP A = JtJ;
@@ -309,13 +309,26 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     p[2] = std::atan2(t1.y(), t1.x()) + kHalfPi;
     p[3] = std::atan2(t2.y(), t2.x()) + kHalfPi;
   }
-  init_linear(w, n, p);
+  const double h = half;
+  const Eigen::Vector2d centre(cx, cy);
+  if (init.shading.valid) {
+    // The linear terms of a previous fit of this corner, moved to this window (the model is linear
+    // in them, so the first Gauss-Newton step solves them exactly whatever their start): no
+    // separate linear solve.
+    const SaddleShading& sh = init.shading;
+    const Eigen::Vector2d d = centre - init.shading_at;
+    p.segment<6>(5) << sh.a + sh.gx * d.x() + sh.gy * d.y(), sh.gx * h, sh.gy * h,
+        sh.b + sh.hx * d.x() + sh.hy * d.y(), sh.hx * h, sh.hy * h;
+  } else {
+    init_linear(w, n, p);
+  }
   // With the edges fixed the problem is nearly linear around a close start: (almost) Gauss-Newton.
   double cost = 0;
+  const bool shaped = !init.shading.valid;
   out.iterations =
       edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, kTrustStepPx, 1e-6,
-                                  cost)
-            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 0.0, 1e-3, cost);
+                                  shaped, cost)
+            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 0.0, 1e-3, shaped, cost);
   const double used = static_cast<double>(w.wt.head(n).sum());
   out.theta1 = p[2];
   out.theta2 = p[3];
@@ -331,6 +344,15 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   } else {
     out.px = Eigen::Vector2d(cx, cy) + q;
   }
+  // The linear terms referred to the corner, gradients per raw pixel.
+  const Eigen::Vector2d d = (out.px - centre) / h;
+  out.shading = SaddleShading{p[5] + p[6] * d.x() + p[7] * d.y(),
+                              p[6] / h,
+                              p[7] / h,
+                              p[8] + p[9] * d.x() + p[10] * d.y(),
+                              p[9] / h,
+                              p[10] / h,
+                              true};
   out.converged = true;
   return true;
 }

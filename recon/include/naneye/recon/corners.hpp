@@ -51,6 +51,7 @@ struct Corner {
   double residual = 0;  // RMS fit residual, DN
   // Fitted edge directions (radians, in undistorted local pixel coordinates) - reused when tracking.
   double theta_row = 0, theta_col = 0;
+  SaddleShading shading{};  // the fit's linear terms at px - reused when tracking
 };
 
 struct CornerResult {

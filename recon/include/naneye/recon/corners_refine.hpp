@@ -17,10 +17,20 @@
 
 namespace naneye::recon {
 
+// The linear part of the model (mean a, contrast b, their gradients per raw pixel) referred to the
+// corner itself, so that it does not depend on the fit window: a later fit of the same corner (the
+// final pass, the next frame) starts with it instead of solving for it first.
+struct SaddleShading {
+  double a = 0, gx = 0, gy = 0, b = 0, hx = 0, hy = 0;
+  bool valid = false;
+};
+
 struct SaddleInit {
   Eigen::Vector2d px{0, 0};       // initial corner, raw pixel
   double theta1 = 0, theta2 = 0;  // normals of the two edges (radians, local undistorted pixels)
   double sigma = 0.8;
+  SaddleShading shading{};  // a start for the linear terms, referred to `shading_at` (fit_saddle_fast)
+  Eigen::Vector2d shading_at{0, 0};
 };
 
 struct SaddleFit {
@@ -32,6 +42,7 @@ struct SaddleFit {
   int outliers = 0;  // pixels dropped as outliers (defect pixels)
   bool converged = false;
   bool undistorted = false;  // false: fitted in raw pixels (window beyond the model's fold)
+  SaddleShading shading{};   // referred to px (fit_saddle_fast only)
 };
 
 // A read-only float image with the rectangle [col 0, col_end) x [row_begin, row_end) usable.
