@@ -13,8 +13,11 @@ constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
 constexpr double kTrustStepPx = 0.05;
 using Arr = FastFitScratch::Arr;
 using Vec = Eigen::Matrix<double, kParams, 1>;
-using MatP = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kParams, kParams>;
-using VecP = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kParams, 1>;
+// The normal equations of K active parameters: fixed sizes, so Eigen unrolls their solve.
+template <int K>
+using MatK = Eigen::Matrix<double, K, K>;
+template <int K>
+using VecK = Eigen::Matrix<double, K, 1>;
 
 // Which parameters are fitted: all, or all but the two edge normals.
 constexpr std::array<int, 11> kFull = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
@@ -71,8 +74,10 @@ void shape(FastFitScratch& w, int n, const Model& m) {
 
 // The weighted cost at p and, with JtJ set, the normal equations of the active parameters.
 // `shape_ready`: shape() was already run at this p.
-double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11>* active, int n_active,
-                MatP* JtJ, VecP* Jtr, bool shape_ready = false) {
+template <int K>
+double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11>* active, MatK<K>* JtJ,
+                VecK<K>* Jtr, bool shape_ready = false) {
+  constexpr int n_active = K;
   const Model m(p);
   const auto yx = w.yx.head(n), yy = w.yy.head(n), dx = w.dx.head(n), dy = w.dy.head(n);
   const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
@@ -125,8 +130,6 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11
     }
     w.Jw[static_cast<std::size_t>(j)].head(n) = w.wt.head(n) * col.head(n);
   }
-  JtJ->resize(n_active, n_active);
-  Jtr->resize(n_active);
   for (int a = 0; a < n_active; ++a) {
     const auto ja = w.Jw[static_cast<std::size_t>(a)].head(n);
     (*Jtr)[a] = static_cast<double>((ja * w.r.head(n)).sum());
@@ -166,17 +169,19 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
 }
 
 // `shape_ready`: shape() was run at p (by init_linear). Returns the iterations, `cost` the final cost.
-int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active, int n_active,
+template <int K>
+int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active,
                         int max_iterations, double tolerance_px, double trust_px, double lambda,
                         bool shape_ready, double& cost) {
-  MatP JtJ, JtJ2;
-  VecP Jtr, Jtr2;
-  cost = evaluate(w, n, p, &active, n_active, &JtJ, &Jtr, shape_ready);
+  constexpr int n_active = K;
+  MatK<K> JtJ, JtJ2;
+  VecK<K> Jtr, Jtr2;
+  cost = evaluate<K>(w, n, p, &active, &JtJ, &Jtr, shape_ready);
   int it = 0;
   for (; it < max_iterations; ++it) {
-    MatP A = JtJ;
+    MatK<K> A = JtJ;
     A.diagonal() += lambda * JtJ.diagonal().cwiseMax(1e-12);
-    const VecP step = -A.ldlt().solve(Jtr);
+    const VecK<K> step = -A.ldlt().solve(Jtr);
     if (!step.allFinite()) break;
     Vec cand = p;
     for (int j = 0; j < n_active; ++j) cand[active[static_cast<std::size_t>(j)]] += step[j];
@@ -189,19 +194,20 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
     double blur_step = 0;  // the other nonlinear parameter: a start with a wrong blur needs iterations
     for (int j = 0; j < n_active; ++j)
       if (active[static_cast<std::size_t>(j)] == 4) blur_step = std::abs(step[j]);
-    if (lambda <= 1e-3 && step.head<2>().norm() < std::max(trust_px, tolerance_px) && blur_step < trust_px) {
+    if (lambda <= 1e-3 && step.template head<2>().norm() < std::max(trust_px, tolerance_px) &&
+        blur_step < trust_px) {
       p = cand;
       cost = std::max(0.0, cost + 2.0 * step.dot(Jtr) + step.dot(JtJ * step));
       break;
     }
-    const double c2 = evaluate(w, n, cand, &active, n_active, &JtJ2, &Jtr2);
+    const double c2 = evaluate<K>(w, n, cand, &active, &JtJ2, &Jtr2);
     if (c2 < cost) {
       p = cand;
       JtJ = JtJ2;
       Jtr = Jtr2;
       cost = c2;
       lambda = std::max(lambda * 0.2, 1e-9);
-      if (step.head<2>().norm() < tolerance_px) break;
+      if (step.template head<2>().norm() < tolerance_px) break;
     } else {
       lambda *= 10.0;
       if (lambda > 1e8) break;
@@ -326,9 +332,9 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   double cost = 0;
   const bool shaped = !init.shading.valid;
   out.iterations =
-      edges ? levenberg_marquardt(w, n, p, kFixedEdges, 9, max_iterations, tolerance_px, kTrustStepPx, 1e-6,
-                                  shaped, cost)
-            : levenberg_marquardt(w, n, p, kFull, 11, max_iterations, tolerance_px, 0.0, 1e-3, shaped, cost);
+      edges ? levenberg_marquardt<9>(w, n, p, kFixedEdges, max_iterations, tolerance_px, kTrustStepPx, 1e-6,
+                                     shaped, cost)
+            : levenberg_marquardt<11>(w, n, p, kFull, max_iterations, tolerance_px, 0.0, 1e-3, shaped, cost);
   const double used = static_cast<double>(w.wt.head(n).sum());
   out.theta1 = p[2];
   out.theta2 = p[3];
