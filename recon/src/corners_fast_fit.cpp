@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace naneye::recon {
 namespace {
@@ -72,6 +73,52 @@ void shape(FastFitScratch& w, int n, const Model& m) {
   w.S.head(n) = w.E1.head(n) * w.E2.head(n);
 }
 
+// The normal equations Jw' J and Jw' y of the first K columns. One pass over the pixels per row
+// of Jw' J, all of that row's sums in registers at once: the 9 (not 54) passes halve the loads
+// and drop the 54 horizontal reductions of separate dot products (~1/4 of a tracked frame's time).
+// Four-float vectors (GCC vector extension: SSE2, the x86-64 baseline); the arrays' tails up to
+// the next multiple of 4 are zeroed first so that whole vectors can be read.
+using V4 = float __attribute__((vector_size(16)));
+inline V4 load4(const float* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline double sum4(V4 v) {
+  return static_cast<double>((v[0] + v[1]) + (v[2] + v[3]));
+}
+
+template <int K, int A>
+void normal_row(const std::array<const float*, K + 1>& cols, const float* jw, int n4, MatK<K>& JtJ,
+                VecK<K>& Jty) {
+  constexpr int m = K + 1 - A;  // columns A..K-1 and y
+  V4 acc[m] = {};
+  for (int i = 0; i < n4; i += 4) {
+    const V4 x = load4(jw + i);
+#pragma GCC unroll 12
+    for (int b = 0; b < m; ++b) acc[b] += x * load4(cols[static_cast<std::size_t>(A + b)] + i);
+  }
+  for (int b = 0; b + 1 < m; ++b) JtJ(A, A + b) = JtJ(A + b, A) = sum4(acc[b]);
+  Jty[A] = sum4(acc[m - 1]);
+}
+
+template <int K>
+void normal_equations(FastFitScratch& w, int n, float* y, MatK<K>& JtJ, VecK<K>& Jty) {
+  const int n4 = (n + 3) & ~3;
+  std::array<const float*, K + 1> cols;
+  for (int b = 0; b < K; ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    for (int i = n; i < n4; ++i) w.J[k][i] = w.Jw[k][i] = 0.0f;
+    cols[k] = w.J[k].data();
+  }
+  for (int i = n; i < n4; ++i) y[i] = 0.0f;
+  cols[K] = y;
+  [&]<int... A>(std::integer_sequence<int, A...>) {
+    (normal_row<K, A>(cols, w.Jw[static_cast<std::size_t>(A)].data(), n4, JtJ, Jty), ...);
+  }
+  (std::make_integer_sequence<int, K>{});
+}
+
 // The weighted cost at p and, with JtJ set, the normal equations of the active parameters.
 // `shape_ready`: shape() was already run at this p.
 template <int K>
@@ -130,15 +177,7 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11
     }
     w.Jw[static_cast<std::size_t>(j)].head(n) = w.wt.head(n) * col.head(n);
   }
-  for (int a = 0; a < n_active; ++a) {
-    const auto ja = w.Jw[static_cast<std::size_t>(a)].head(n);
-    (*Jtr)[a] = static_cast<double>((ja * w.r.head(n)).sum());
-    for (int b = a; b < n_active; ++b) {
-      const double v = static_cast<double>((ja * w.J[static_cast<std::size_t>(b)].head(n)).sum());
-      (*JtJ)(a, b) = v;
-      (*JtJ)(b, a) = v;
-    }
-  }
+  normal_equations<K>(w, n, w.r.data(), *JtJ, *Jtr);
   return cost;
 }
 
@@ -240,6 +279,17 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   }
   // Local undistorted coordinates y = Jp (x(p) - x(c)), Jp = d pixel / d normalized at the centre:
   // y ~ p - c to first order and the board's edges are straight lines in y (see corners_refine.hpp).
+  // The window's rows of the table and of the image are rarely in cache (two cameras' tables are
+  // ~1 MB): ask for all of them before the first is needed.
+  for (int r = -half; r <= half; ++r) {
+    const auto i = static_cast<std::size_t>((cy + r) * map.width() + cx - half);
+    const float* t = map.xy_data() + 2 * i;
+    __builtin_prefetch(t);
+    __builtin_prefetch(t + 16);
+    __builtin_prefetch(t + 2 * (2 * half));
+    __builtin_prefetch(img.data + static_cast<std::size_t>((cy + r) * img.width + cx - half));
+    __builtin_prefetch(img.data + static_cast<std::size_t>((cy + r) * img.width + cx + half));
+  }
   float x0f = 0, y0f = 0;
   bool undist = map.at(cx, cy, x0f, y0f);
   for (int r = -half; r <= half && undist; ++r) {
@@ -282,15 +332,14 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     if (!(wr > 0.0f)) continue;
     const std::size_t row = static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(map.width()) +
                             static_cast<std::size_t>(cx);
-    const float* mx = map.x_data() + row;
-    const float* my = map.y_data() + row;
+    const float* mxy = map.xy_data() + 2 * row;
     const float* im = img.data + static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(img.width) +
                       static_cast<std::size_t>(cx);
     const float fr = static_cast<float>(r) * inv_half;
     for (int q = q0; q <= q1; ++q, ++n) {
       float yx = static_cast<float>(q), yy = static_cast<float>(r);
       if (undist) {
-        const float ux = mx[q] - x0f, uy = my[q] - y0f;
+        const float ux = mxy[2 * q] - x0f, uy = mxy[2 * q + 1] - y0f;
         yx = j00 * ux + j01 * uy;
         yy = j10 * ux + j11 * uy;
       }

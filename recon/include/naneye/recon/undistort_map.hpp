@@ -23,18 +23,18 @@ class UndistortMap {
   bool at(int col, int row, float& x, float& y) const {
     if (col < 0 || row < 0 || col >= width_ || row >= height_) return false;
     const auto i = static_cast<std::size_t>(row * width_ + col);
-    x = x_[i];
-    y = y_[i];
+    x = xy_[2 * i];
+    y = xy_[2 * i + 1];
     return valid_[i] != 0;
   }
-  // Row-major tables (width * height); a pixel beyond the fold holds 0 and valid() == 0.
-  const float* x_data() const { return x_.data(); }
-  const float* y_data() const { return y_.data(); }
+  // Row-major tables (width * height): x and y interleaved (a fit window reads both, from one
+  // cache line), a pixel beyond the fold holds 0 and valid() == 0.
+  const float* xy_data() const { return xy_.data(); }
   const unsigned char* valid_data() const { return valid_.data(); }
 
  private:
   int width_ = 0, height_ = 0;
-  std::vector<float> x_, y_;
+  std::vector<float> xy_;
   std::vector<unsigned char> valid_;
 };
 
