@@ -1,5 +1,7 @@
 #include "naneye/recon/corners_fast_fit.hpp"
 
+#include "corners_simd.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
@@ -24,23 +26,6 @@ using VecK = Eigen::Matrix<double, K, 1>;
 constexpr std::array<int, 11> kFull = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
 constexpr std::array<int, 11> kFixedEdges = {0, 1, 4, 5, 6, 7, 8, 9, 10, -1, -1};
 
-// erf(z) and exp(-z^2) of a whole array: Abramowitz & Stegun 7.1.26 (|error| <= 1.5e-7, below float
-// precision), which needs exp(-z^2) anyway, and so does the derivative of erf. Eigen packets: the
-// loop runs 4 (SSE) or 8 (AVX) pixels at a time whatever the compiler's optimisation level.
-// `z` holds the arguments on entry and 1 / (1 + p |z|) on return (work space).
-void erf_and_gauss(Arr& z, int n, Arr& e, Arr& g) {
-  constexpr float p = 0.3275911f, a1 = 0.254829592f, a2 = -0.284496736f, a3 = 1.421413741f,
-                  a4 = -1.453152027f, a5 = 1.061405429f;
-  auto zn = z.head(n);
-  g.head(n) = (-zn.square()).exp();
-  // sign(z) without a select (Eigen 3.4 does not vectorise Select): +-1 but for |z| < 1e-30, where
-  // erf(z) ~ 0 anyway.
-  e.head(n) = (zn * 1e30f).max(-1.0f).min(1.0f);
-  zn = (1.0f + p * zn.abs()).inverse();
-  const auto t = z.head(n);
-  e.head(n) *= 1.0f - ((((a5 * t + a4) * t + a3) * t + a2) * t + a1) * t * g.head(n);
-}
-
 struct Model {
   float qx, qy, c1, s1, c2, s2, k, inv_s, a, gx, gy, b, hx, hy;
   explicit Model(const Vec& p)
@@ -60,124 +45,67 @@ struct Model {
         hy(float(p[10])) {}
 };
 
-// The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2.
+// The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2 (corners_simd.hpp).
 void shape(FastFitScratch& w, int n, const Model& m) {
-  const auto yx = w.yx.head(n), yy = w.yy.head(n);
-  w.U1.head(n) = m.c1 * (yx - m.qx) + m.s1 * (yy - m.qy);
-  w.U2.head(n) = m.c2 * (yx - m.qx) + m.s2 * (yy - m.qy);
-  const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
-  w.Z.head(n) = m.k * u1;
-  erf_and_gauss(w.Z, n, w.E1, w.G1);
-  w.Z.head(n) = m.k * u2;
-  erf_and_gauss(w.Z, n, w.E2, w.G2);
-  w.S.head(n) = w.E1.head(n) * w.E2.head(n);
+  const simd::ShapeParams sp{m.qx, m.qy, m.c1, m.s1, m.c2, m.s2, m.k};
+  (w.use_avx2 ? simd::shape_avx2 : simd::shape_sse)(sp, w.yx.data(), w.yy.data(), n, w.U1.data(), w.U2.data(),
+                                                    w.E1.data(), w.E2.data(), w.G1.data(), w.G2.data(),
+                                                    w.S.data());
 }
 
-// The normal equations Jw' J and Jw' y of the first K columns. One pass over the pixels per row
-// of Jw' J, all of that row's sums in registers at once: the 9 (not 54) passes halve the loads
-// and drop the 54 horizontal reductions of separate dot products (~1/4 of a tracked frame's time).
-// Four-float vectors (GCC vector extension: SSE2, the x86-64 baseline); the arrays' tails up to
-// the next multiple of 4 are zeroed first so that whole vectors can be read.
-using V4 = float __attribute__((vector_size(16)));
-inline V4 load4(const float* p) {
-  V4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-inline double sum4(V4 v) {
-  return static_cast<double>((v[0] + v[1]) + (v[2] + v[3]));
-}
-
-template <int K, int A>
-void normal_row(const std::array<const float*, K + 1>& cols, const float* jw, int n4, MatK<K>& JtJ,
-                VecK<K>& Jty) {
-  constexpr int m = K + 1 - A;  // columns A..K-1 and y
-  V4 acc[m] = {};
-  for (int i = 0; i < n4; i += 4) {
-    const V4 x = load4(jw + i);
-#pragma GCC unroll 12
-    for (int b = 0; b < m; ++b) acc[b] += x * load4(cols[static_cast<std::size_t>(A + b)] + i);
-  }
-  for (int b = 0; b + 1 < m; ++b) JtJ(A, A + b) = JtJ(A + b, A) = sum4(acc[b]);
-  Jty[A] = sum4(acc[m - 1]);
-}
-
+// The normal equations Jw' J and Jw' y of the first K columns of J (y: the residual, or the data for
+// the linear start), in one pass over the pixels per row (corners_simd.hpp): ~1/4 of a tracked
+// frame's time as K (K + 3) / 2 separate dot products. The tails up to a whole number of 8-float
+// vectors are zeroed first.
 template <int K>
 void normal_equations(FastFitScratch& w, int n, float* y, MatK<K>& JtJ, VecK<K>& Jty) {
-  const int n4 = (n + 3) & ~3;
+  const int nv = (n + 7) & ~7;
   std::array<const float*, K + 1> cols;
+  std::array<const float*, K> jw;
   for (int b = 0; b < K; ++b) {
     const auto k = static_cast<std::size_t>(b);
-    for (int i = n; i < n4; ++i) w.J[k][i] = w.Jw[k][i] = 0.0f;
+    for (int i = n; i < nv; ++i) w.J[k][i] = w.Jw[k][i] = 0.0f;
     cols[k] = w.J[k].data();
+    jw[k] = w.Jw[k].data();
   }
-  for (int i = n; i < n4; ++i) y[i] = 0.0f;
+  for (int i = n; i < nv; ++i) y[i] = 0.0f;
   cols[K] = y;
-  [&]<int... A>(std::integer_sequence<int, A...>) {
-    (normal_row<K, A>(cols, w.Jw[static_cast<std::size_t>(A)].data(), n4, JtJ, Jty), ...);
+  std::array<double, (K + 1) * K> out;
+  if (w.use_avx2) {
+    simd::normal_equations_avx2<K>(cols, jw, nv, out);
+  } else {
+    simd::normal_equations_sse<K>(cols, jw, nv, out);
   }
-  (std::make_integer_sequence<int, K>{});
+  for (int a = 0; a < K; ++a) {
+    for (int b = a; b < K; ++b) JtJ(a, b) = JtJ(b, a) = out[static_cast<std::size_t>(a * (K + 1) + b)];
+    Jty[a] = out[static_cast<std::size_t>(a * (K + 1) + K)];
+  }
 }
 
-// The weighted cost at p and, with JtJ set, the normal equations of the active parameters.
-// `shape_ready`: shape() was already run at this p.
+// The weighted cost at p and the normal equations of the K active parameters: K = 9 with the edge
+// normals fixed, 11 with all parameters (kFixedEdges / kFull order). `shape_ready`: shape() was
+// already run at this p.
 template <int K>
-double evaluate(FastFitScratch& w, int n, const Vec& p, const std::array<int, 11>* active, MatK<K>* JtJ,
-                VecK<K>* Jtr, bool shape_ready = false) {
-  constexpr int n_active = K;
+double evaluate(FastFitScratch& w, int n, const Vec& p, MatK<K>& JtJ, VecK<K>& Jtr,
+                bool shape_ready = false) {
+  static_assert(K == 9 || K == 11);
   const Model m(p);
-  const auto yx = w.yx.head(n), yy = w.yy.head(n), dx = w.dx.head(n), dy = w.dy.head(n);
-  const auto u1 = w.U1.head(n), u2 = w.U2.head(n);
   if (!shape_ready) shape(w, n, m);
-  w.C.head(n) = m.b + m.hx * dx + m.hy * dy;
-  w.r.head(n) = m.a + m.gx * dx + m.gy * dy + w.C.head(n) * w.S.head(n) - w.val.head(n);
-  const double cost = static_cast<double>((w.wt.head(n) * w.r.head(n).square()).sum());
-  if (!JtJ) return cost;
-  constexpr float kTwoOverSqrtPi = 1.12837916709551257390f;
-  // A = C dS/du1, B = C dS/du2 (kept in G1, G2).
-  w.G1.head(n) *= (kTwoOverSqrtPi * m.k) * w.C.head(n) * w.E2.head(n);
-  w.G2.head(n) *= (kTwoOverSqrtPi * m.k) * w.C.head(n) * w.E1.head(n);
-  const auto A = w.G1.head(n), B = w.G2.head(n), S = w.S.head(n);
-  for (int j = 0; j < n_active; ++j) {
-    Arr& col = w.J[static_cast<std::size_t>(j)];
-    switch ((*active)[static_cast<std::size_t>(j)]) {
-      case 0:
-        col.head(n) = -(A * m.c1 + B * m.c2);
-        break;
-      case 1:
-        col.head(n) = -(A * m.s1 + B * m.s2);
-        break;
-      case 2:
-        col.head(n) = A * (-m.s1 * (yx - m.qx) + m.c1 * (yy - m.qy));
-        break;
-      case 3:
-        col.head(n) = B * (-m.s2 * (yx - m.qx) + m.c2 * (yy - m.qy));
-        break;
-      case 4:
-        col.head(n) = -(A * u1 + B * u2) * m.inv_s;
-        break;
-      case 5:
-        col.head(n).setOnes();
-        break;
-      case 6:
-        col.head(n) = dx;
-        break;
-      case 7:
-        col.head(n) = dy;
-        break;
-      case 8:
-        col.head(n) = S;
-        break;
-      case 9:
-        col.head(n) = dx * S;
-        break;
-      default:
-        col.head(n) = dy * S;
-        break;
-    }
-    w.Jw[static_cast<std::size_t>(j)].head(n) = w.wt.head(n) * col.head(n);
+  const simd::ModelParams mp{m.qx,    m.qy, m.c1, m.s1, m.c2, m.s2, m.k,
+                             m.inv_s, m.a,  m.gx, m.gy, m.b,  m.hx, m.hy};
+  const simd::WindowArrays in{w.yx.data(), w.yy.data(), w.dx.data(), w.dy.data(), w.val.data(),
+                              w.wt.data(), w.U1.data(), w.U2.data(), w.E1.data(), w.E2.data(),
+                              w.G1.data(), w.G2.data(), w.S.data()};
+  std::array<float*, 11> J{}, Jw{};
+  for (std::size_t c = 0; c < 11; ++c) {
+    J[c] = w.J[c].data();
+    Jw[c] = w.Jw[c].data();
   }
-  normal_equations<K>(w, n, w.r.data(), *JtJ, *Jtr);
+  const int nv = (n + 7) & ~7;  // the window's tails hold zero weight (fit_saddle_fast)
+  constexpr bool free_edges = K == 11;
+  const double cost = w.use_avx2 ? simd::residuals_jacobian_avx2<free_edges>(mp, in, nv, w.r.data(), J, Jw)
+                                 : simd::residuals_jacobian_sse<free_edges>(mp, in, nv, w.r.data(), J, Jw);
+  normal_equations<K>(w, n, w.r.data(), JtJ, Jtr);
   return cost;
 }
 
@@ -192,17 +120,10 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
   w.J[3].head(n) = S;
   w.J[4].head(n) = dx * S;
   w.J[5].head(n) = dy * S;
-  Eigen::Matrix<double, 6, 6> M;
-  Eigen::Matrix<double, 6, 1> rhs;
-  for (std::size_t a = 0; a < 6; ++a) {
-    w.Jw[a].head(n) = w.wt.head(n) * w.J[a].head(n);
-    rhs[static_cast<int>(a)] = static_cast<double>((w.Jw[a].head(n) * w.val.head(n)).sum());
-    for (std::size_t b = 0; b <= a; ++b) {
-      const double v = static_cast<double>((w.Jw[a].head(n) * w.J[b].head(n)).sum());
-      M(static_cast<int>(a), static_cast<int>(b)) = v;
-      M(static_cast<int>(b), static_cast<int>(a)) = v;
-    }
-  }
+  for (std::size_t a = 0; a < 6; ++a) w.Jw[a].head(n) = w.wt.head(n) * w.J[a].head(n);
+  MatK<6> M;
+  VecK<6> rhs;
+  normal_equations<6>(w, n, w.val.data(), M, rhs);
   M.diagonal().array() += 1e-9 * (M.diagonal().maxCoeff() + 1.0);
   p.segment<6>(5) = M.ldlt().solve(rhs);
 }
@@ -215,7 +136,7 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
   constexpr int n_active = K;
   MatK<K> JtJ, JtJ2;
   VecK<K> Jtr, Jtr2;
-  cost = evaluate<K>(w, n, p, &active, &JtJ, &Jtr, shape_ready);
+  cost = evaluate<K>(w, n, p, JtJ, Jtr, shape_ready);
   int it = 0;
   for (; it < max_iterations; ++it) {
     MatK<K> A = JtJ;
@@ -239,7 +160,7 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
       cost = std::max(0.0, cost + 2.0 * step.dot(Jtr) + step.dot(JtJ * step));
       break;
     }
-    const double c2 = evaluate<K>(w, n, cand, &active, &JtJ2, &Jtr2);
+    const double c2 = evaluate<K>(w, n, cand, JtJ2, Jtr2);
     if (c2 < cost) {
       p = cand;
       JtJ = JtJ2;
@@ -257,7 +178,7 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
 
 }  // namespace
 
-FastFitScratch::FastFitScratch() {
+FastFitScratch::FastFitScratch() : use_avx2(simd::avx2_available()) {
   for (Arr* a : {&dx, &dy, &yx, &yy, &val, &wt, &r, &E1, &E2, &G1, &G2, &S, &C, &U1, &U2, &Z})
     a->setZero(kMaxPixels);
   for (std::size_t i = 0; i < J.size(); ++i) {
@@ -351,6 +272,9 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
       wt[n] = std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
     }
   }
+
+  // Whole vectors are read past n (corners_simd.hpp): the tail pixels get zero weight.
+  for (int i = n; i < ((n + 7) & ~7); ++i) dx[i] = dy[i] = wyx[i] = wyy[i] = val[i] = wt[i] = 0.0f;
 
   Vec p;
   // y = p - c to first order: the start needs no more.

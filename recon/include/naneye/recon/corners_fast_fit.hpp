@@ -28,12 +28,15 @@ struct EdgeDirections {
 // Work space of one fit (~25 KB): owned by the caller and reused, so a fit allocates nothing.
 struct FastFitScratch {
   static constexpr int kMaxHalf = 9;      // window half size incl. the taper: radius <= 8
-  static constexpr int kMaxPixels = 368;  // (2 * 9 + 1)^2 = 361, rounded up to whole SIMD packets
+  static constexpr int kMaxPixels = 368;  // (2 * 9 + 1)^2 = 361, rounded up to whole 8-float vectors
   using Arr = Eigen::Array<float, Eigen::Dynamic, 1, 0, kMaxPixels, 1>;
   Arr dx, dy, yx, yy, val, wt;  // the window: offsets / half, local coordinates, pixel values, weights
   Arr r, E1, E2, G1, G2, S, C, U1, U2, Z;
   std::array<Arr, 11> J, Jw;  // Jacobian columns and their weighted copies
-  FastFitScratch();           // sizes every array to kMaxPixels (fixed storage: no heap)
+  // The fit's innermost loops 8 floats at a time (AVX2 + FMA) when this CPU has them, else 4
+  // (SSE2); tests turn it off to compare both.
+  bool use_avx2 = false;
+  FastFitScratch();  // sizes every array to kMaxPixels (fixed storage: no heap), picks the kernels
 };
 
 // Fits one corner from init.px with the pixels within `radius` (Chebyshev, 1 px taper beyond), like

@@ -1,0 +1,119 @@
+// The corner fit's vector kernels (recon/src/corners_simd.hpp): erf and exp(-z^2) against the C
+// library, the normal equations against a double-precision sum, and the 4-lane (SSE2) and 8-lane
+// (AVX2, when this CPU has it) builds of the whole fit against each other on rendered corners.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "../../recon/src/corners_simd.hpp"
+#include "corner_test_util.hpp"
+#include "naneye/recon/corners_fast_fit.hpp"
+
+namespace naneye::recon {
+namespace {
+
+using ShapeFn = void (*)(const simd::ShapeParams&, const float*, const float*, int, float*, float*, float*,
+                         float*, float*, float*, float*);
+
+std::vector<ShapeFn> shape_kernels() {
+  std::vector<ShapeFn> k{simd::shape_sse};
+  if (simd::avx2_available()) k.push_back(simd::shape_avx2);
+  return k;
+}
+
+TEST(SimdKernels, ErfAndGaussianMatchTheCLibrary) {
+  // u1 = yx - qx with the first edge's normal along x and k = 1: E1 = erf(yx), G1 = exp(-yx^2).
+  constexpr int n = 368;
+  std::vector<float> yx(n), yy(n, 0.0f), U1(n), U2(n), E1(n), E2(n), G1(n), G2(n), S(n);
+  for (const ShapeFn shape : shape_kernels()) {
+    double worst_erf = 0, worst_gauss = 0;
+    for (int block = 0; block < 30; ++block) {
+      for (int i = 0; i < n; ++i)
+        yx[static_cast<std::size_t>(i)] = -9.5f + 0.00017f * static_cast<float>(block * n + i);
+      shape(simd::ShapeParams{0, 0, 1, 0, 0, 1, 1}, yx.data(), yy.data(), n, U1.data(), U2.data(), E1.data(),
+            E2.data(), G1.data(), G2.data(), S.data());
+      for (std::size_t i = 0; i < n; ++i) {
+        const double z = yx[i];
+        worst_erf = std::max(worst_erf, std::abs(E1[i] - std::erf(z)));
+        // Relative while exp(-z^2) is a normal float (z^2 < 87: 2^-126 = exp(-87.3)), then held
+        // at the smallest normal float.
+        // (Against exp of the float z^2 the kernel forms: its rounding alone is 5e-6 relative at z = 9.)
+        const double z2 = static_cast<float>(yx[i] * yx[i]);
+        if (z2 < 87) worst_gauss = std::max(worst_gauss, std::abs(G1[i] / std::exp(-z2) - 1.0));
+        if (z * z > 87.4) {
+          EXPECT_LT(G1[i], 1.3e-38f) << z;
+        }
+        EXPECT_EQ(E2[i], 0.0f);  // u2 = yy = 0
+      }
+    }
+    // A&S 7.1.26 is good to 1.5e-7; the float evaluation adds a few ulp.
+    EXPECT_LT(worst_erf, 5e-7);
+    EXPECT_LT(worst_gauss, 5e-7);
+  }
+}
+
+TEST(SimdKernels, NormalEquationsMatchADoubleSum) {
+  constexpr int K = 9, n = 203, nv = 208;  // n not a multiple of the vector length: tails zeroed
+  std::mt19937 rng(5);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  std::vector<std::vector<float>> J(K + 1, std::vector<float>(nv, 0.0f)), Jw(K, std::vector<float>(nv, 0.0f));
+  for (int c = 0; c <= K; ++c)
+    for (int i = 0; i < n; ++i) J[static_cast<std::size_t>(c)][static_cast<std::size_t>(i)] = g(rng);
+  for (int c = 0; c < K; ++c)
+    for (int i = 0; i < n; ++i)
+      Jw[static_cast<std::size_t>(c)][static_cast<std::size_t>(i)] =
+          0.5f * J[static_cast<std::size_t>(c)][static_cast<std::size_t>(i)];
+  std::array<const float*, K + 1> cols;
+  std::array<const float*, K> jw;
+  for (std::size_t c = 0; c <= K; ++c) cols[c] = J[c].data();
+  for (std::size_t c = 0; c < K; ++c) jw[c] = Jw[c].data();
+  std::array<double, (K + 1) * K> sse{}, avx{};
+  simd::normal_equations_sse<K>(cols, jw, nv, sse);
+  if (simd::avx2_available()) simd::normal_equations_avx2<K>(cols, jw, nv, avx);
+  for (int a = 0; a < K; ++a) {
+    for (int b = a; b <= K; ++b) {
+      double ref = 0;
+      for (std::size_t i = 0; i < n; ++i)
+        ref += 0.5 * J[static_cast<std::size_t>(a)][i] * J[static_cast<std::size_t>(b)][i];
+      const auto k = static_cast<std::size_t>(a * (K + 1) + b);
+      EXPECT_NEAR(sse[k], ref, 2e-5 * (1 + std::abs(ref))) << a << "," << b;
+      if (simd::avx2_available()) {
+        EXPECT_NEAR(avx[k], ref, 2e-5 * (1 + std::abs(ref))) << a << "," << b;
+      }
+    }
+  }
+}
+
+TEST(SimdKernels, FourAndEightLaneFitsAgree) {
+  if (!simd::avx2_available()) GTEST_SKIP() << "no AVX2 + FMA on this CPU: only the 4-lane build runs";
+  const StereoRig& rig = test::paper_d3();
+  CornerDetector det(rig.left);
+  std::mt19937_64 rng(33);
+  const sim::RenderedPair p = test::render(false, test::random_pose(rng, 65, 75, 20, 2), 77);
+  CornerResult found;
+  ASSERT_TRUE(det.detect_full(sim::raw_view(p.left, false), found));
+  const UndistortMap map(rig.left);
+  const LumaView v{det.luminance().data(), 250, 250, 1, 249, 249};
+  FastFitScratch sse, avx;
+  sse.use_avx2 = false;
+  avx.use_avx2 = true;
+  double worst = 0;
+  for (int i = 0; i < found.count; ++i) {
+    const Corner& c = found.corners[static_cast<std::size_t>(i)];
+    SaddleInit init{c.px + Eigen::Vector2d(0.3, -0.2), c.theta_row, c.theta_col, 0.9};
+    SaddleFit a, b;
+    ASSERT_TRUE(fit_saddle_fast(v, rig.left, map, init, nullptr, 6.0, 50, 1e-4, sse, a));
+    ASSERT_TRUE(fit_saddle_fast(v, rig.left, map, init, nullptr, 6.0, 50, 1e-4, avx, b));
+    worst = std::max(worst, (a.px - b.px).norm());
+    EXPECT_NEAR(a.sigma, b.sigma, 1e-3);
+    EXPECT_NEAR(a.rms, b.rms, 1e-2 * (1 + a.rms));
+  }
+  // Float sums in another order: the two builds agree far below the corner noise (~0.01 px).
+  EXPECT_LT(worst, 1e-4);
+  std::printf("4- vs 8-lane fits: worst corner difference %.2e px over %d corners\n", worst, found.count);
+}
+
+}  // namespace
+}  // namespace naneye::recon
