@@ -99,22 +99,57 @@ bool CornerDetector::detect(const RawImageView& image, const CornerResult* previ
     failure_ = CornerFailure::bad_input;
     return false;
   }
-  raw_to_luminance(image, luma_.data(), scratch_.data());
   row_begin_ = image.ignore_edge_rows;
   row_end_ = height_ - image.ignore_edge_rows;
   col_end_ = width_ - image.ignore_last_cols;
   if (previous && previous->found && previous->rows == settings_.rows && previous->cols == settings_.cols) {
-    if (track(*previous, out)) return true;
+    // Tracking reads only the board's rows: the luminance of those (and their margin) only. A fit
+    // window that reaches the band's edge fails the tracking, which then searches the whole image.
+    const auto [lo, hi] = tracking_rows(*previous);
+    raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn, lo, hi);
+    const int usable_begin = row_begin_, usable_end = row_end_;
+    row_begin_ = std::max(row_begin_, lo);
+    row_end_ = std::min(row_end_, hi);
+    const bool band = row_begin_ > usable_begin || row_end_ < usable_end;
+    if (track(*previous, out, band)) return true;
     out.found = false;
     out.count = 0;
+    row_begin_ = usable_begin;
+    row_end_ = usable_end;
+    if (!band) return full_search(out);
   }
+  raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn);
   return full_search(out);
 }
 
-bool CornerDetector::track(const CornerResult& previous, CornerResult& out) {
+std::pair<int, int> CornerDetector::tracking_rows(const CornerResult& previous) const {
+  double lo = height_, hi = 0, spacing = 0;
+  for (int r = 0; r < previous.rows; ++r) {
+    for (int c = 0; c < previous.cols; ++c) {
+      const Eigen::Vector2d& p = previous.at(r, c).px;
+      lo = std::min(lo, p.y());
+      hi = std::max(hi, p.y());
+      if (c + 1 < previous.cols) spacing = std::max(spacing, (previous.at(r, c + 1).px - p).norm());
+      if (r + 1 < previous.rows) spacing = std::max(spacing, (previous.at(r + 1, c).px - p).norm());
+    }
+  }
+  // What a corner's work reaches: its fit window (taper included), the polarity samples (up to 0.35
+  // of the spacing), the allowed motion, and two rows of rounding.
+  const double reach =
+      std::max<double>(FastFitScratch::kMaxHalf, 0.35 * spacing + 2.0) + settings_.max_track_motion_px + 2.0;
+  return {static_cast<int>(std::floor(lo - reach)), static_cast<int>(std::ceil(hi + reach)) + 1};
+}
+
+bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool band) {
   out.count = previous.count;
   out.corners = previous.corners;
   if (!refine_all(out, true)) return false;
+  for (int i = 0; i < out.count && band; ++i) {
+    if (out.corners[static_cast<std::size_t>(i)].flags & kCornerNearEdge) {
+      failure_ = CornerFailure::track_moved;  // its window met the edge of the rows computed
+      return false;
+    }
+  }
   for (int i = 0; i < out.count; ++i) {
     const auto k = static_cast<std::size_t>(i);
     // A corner that moved by a sizeable part of the spacing may have locked onto its neighbour,

@@ -8,8 +8,14 @@
 
 namespace naneye::recon {
 
-void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float defect_threshold_dn) {
+void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float defect_threshold_dn,
+                      int row_lo, int row_hi) {
   const int w = im.width, h = im.height;
+  row_lo = std::clamp(row_lo, 0, h);
+  row_hi = row_hi < 0 ? h : std::clamp(row_hi, row_lo, h);
+  // The rows the output rows need: the 3x3 filter reads one row more on each side, the defect test
+  // of those rows two more (a Bayer site's neighbours).
+  const int in_lo = std::max(0, row_lo - 3), in_hi = std::min(h, row_hi + 3);
   const bool bayer = im.layout == PixelLayout::bayer_grbg;
   // Unusable pixels (padding, reference pixels) are replaced by the nearest usable pixel of the same
   // Bayer site (a step of 2 keeps the mosaic phase), so that no filter ever sees them.
@@ -28,15 +34,16 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
   };
   float* f = bayer ? scratch : out;
   const int direct = std::min(col_last + 1, w);  // columns read in place
-  if (row_last >= row_first && direct > 0) {
+  const int conv_lo = std::max(row_first, in_lo), conv_hi = std::min(row_last + 1, in_hi);
+  if (conv_hi > conv_lo && direct > 0) {
     // OpenCV's SIMD conversion for the usable block (headers on our buffers: no allocation).
-    const cv::Mat src(row_last - row_first + 1, direct, CV_16UC1,
-                      const_cast<std::uint16_t*>(im.data + static_cast<std::size_t>(row_first) * im.stride),
+    const cv::Mat src(conv_hi - conv_lo, direct, CV_16UC1,
+                      const_cast<std::uint16_t*>(im.data + static_cast<std::size_t>(conv_lo) * im.stride),
                       static_cast<std::size_t>(im.stride) * sizeof(std::uint16_t));
-    cv::Mat dst(src.rows, direct, CV_32FC1, f + row_first * w, static_cast<std::size_t>(w) * sizeof(float));
+    cv::Mat dst(src.rows, direct, CV_32FC1, f + conv_lo * w, static_cast<std::size_t>(w) * sizeof(float));
     src.convertTo(dst, CV_32F);
   }
-  for (int r = 0; r < h; ++r) {
+  for (int r = in_lo; r < in_hi; ++r) {
     float* dst = f + r * w;
     if (r < row_first || r > row_last) {
       const std::uint16_t* src = im.data + static_cast<std::size_t>(src_row(r)) * im.stride;
@@ -71,7 +78,7 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
   constexpr int kRun = 64;
   std::array<float, kRun> beyond;
   using Run = Eigen::Map<const Eigen::Array<float, Eigen::Dynamic, 1>>;
-  for (int r = step; r < h - step; ++r) {
+  for (int r = std::max(step, in_lo + step); r < std::min(h - step, in_hi - step); ++r) {
     const float* p = f + r * w;
     int force = -1;  // a column that must be tested whatever its screen value
     for (int c0 = step; c0 < w - step; c0 += kRun) {
@@ -102,7 +109,7 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
     return at(r - 1, c - 1) + 2 * at(r - 1, c) + at(r - 1, c + 1) + 2 * at(r, c - 1) + 4 * at(r, c) +
            2 * at(r, c + 1) + at(r + 1, c - 1) + 2 * at(r + 1, c) + at(r + 1, c + 1);
   };
-  for (int r = 0; r < h; ++r) {
+  for (int r = row_lo; r < row_hi; ++r) {
     float* o = out + r * w;
     if (r == 0 || r == h - 1) {
       for (int c = 0; c < w; ++c) o[c] = border(r, c) * (1.0f / 16.0f);

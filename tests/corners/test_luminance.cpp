@@ -112,3 +112,33 @@ TEST(Luminance, BayerDefectsUseTheSameSite) {
 
 }  // namespace
 }  // namespace naneye::recon
+
+namespace naneye::recon {
+namespace {
+
+// Tracking computes only the board's rows: those equal the whole-image computation (exactly, unless a
+// defect pixel sits within two rows outside the band: its repair is then not seen by the band).
+TEST(Luminance, RowBandEqualsTheWholeImage) {
+  for (const PixelLayout layout : {PixelLayout::mono, PixelLayout::bayer_grbg}) {
+    std::vector<std::pair<int, int>> defects;
+    const auto raw = noisy_frame(13, defects);
+    const RawImageView v{raw.data(), kW, kH, kW, layout, 1, 1};
+    std::vector<float> whole(kW * kH), band(kW * kH, -1.0f), scratch(kW * kH);
+    raw_to_luminance(v, whole.data(), scratch.data());
+    for (const auto& [lo, hi] : {std::pair{0, 40}, std::pair{57, 139}, std::pair{200, 250}}) {
+      std::fill(band.begin(), band.end(), -1.0f);
+      raw_to_luminance(v, band.data(), scratch.data(), kDefectThresholdDn, lo, hi);
+      for (int r = lo; r < hi; ++r)
+        for (int c = 0; c < kW; ++c)
+          ASSERT_EQ(band[static_cast<std::size_t>(r * kW + c)], whole[static_cast<std::size_t>(r * kW + c)])
+              << "row " << r << " col " << c << " band " << lo << "-" << hi;
+      // Rows well outside the band are not computed (the work saved).
+      if (lo >= 10) {
+        EXPECT_EQ(band[static_cast<std::size_t>((lo - 10) * kW + 5)], -1.0f);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace naneye::recon

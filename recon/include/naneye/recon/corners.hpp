@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -20,6 +21,9 @@
 #include "naneye/recon/undistort_map.hpp"
 
 namespace naneye::recon {
+
+// A defect pixel lies beyond all its same-site neighbours by this much (raw_to_luminance).
+inline constexpr float kDefectThresholdDn = 60.0f;
 
 enum class PixelLayout : std::uint8_t { mono, bayer_grbg };
 
@@ -117,7 +121,8 @@ class CornerDetector {
   const std::vector<float>& luminance() const { return luma_; }
 
  private:
-  bool track(const CornerResult& previous, CornerResult& out);
+  bool track(const CornerResult& previous, CornerResult& out, bool band);
+  std::pair<int, int> tracking_rows(const CornerResult& previous) const;  // [first, last + 1)
   bool full_search(CornerResult& out);
   bool refine_all(CornerResult& out, bool from_previous);
   double fit_radius(double spacing) const;
@@ -147,9 +152,10 @@ class CornerDetector {
 // GRBG sensor COLOR_BayerGB2GRAY = COLOR_BayerGRBG2GRAY.) Unusable pixels are replicated from their
 // neighbours of the same Bayer site; isolated defect pixels (beyond all 8 same-site neighbours by
 // more than defect_threshold_dn) are replaced by the neighbours' median. `out` and `scratch` must
-// hold width * height floats each.
+// hold width * height floats each. Only rows [row_lo, row_hi) of `out` are sure to be computed
+// (row_hi < 0: to the last row; up to 3 rows beyond may be written): tracking needs the board's only.
 void raw_to_luminance(const RawImageView& image, float* out, float* scratch,
-                      float defect_threshold_dn = 60.0f);
+                      float defect_threshold_dn = kDefectThresholdDn, int row_lo = 0, int row_hi = -1);
 
 // Orders a detected grid by one image-space convention so that two near-identical views number the
 // same physical corners alike: the column axis (row 0 -> col 0 .. cols-1) points to +x in the image
