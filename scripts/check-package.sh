@@ -67,5 +67,16 @@ if command -v systemd-analyze >/dev/null; then
       echo "ok   systemd-analyze verify $unit"
     fi
   done
+  # Issue #6: an exposure score <= 2.0 in `systemd-analyze security` (offline: no running systemd
+  # needed; --threshold is the score x 10 and fails the command above it).
+  for unit in naneyed.service naneyed@cam1.service; do
+    if out=$(cd "$units" && systemd-analyze security --offline=true --threshold=20 "$units/$unit" 2>&1); then
+      echo "ok   systemd-analyze security $unit: $(echo "$out" | grep -o 'exposure level for [^:]*: [0-9.]*' | tail -1)"
+    else
+      echo "FAIL systemd-analyze security $unit (exposure above 2.0):"
+      echo "$out" | tail -25
+      fail=1
+    fi
+  done
 fi
 exit $fail
