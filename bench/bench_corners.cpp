@@ -110,10 +110,12 @@ cv::Mat to_gray8(const Eye& e) {
   return g8;
 }
 
-void BM_Ours(benchmark::State& state, bool tracked) {
+void BM_Ours(benchmark::State& state, bool tracked, bool avx2 = true) {
   const auto& eyes = dataset();
   const recon::StereoRig& rig = test::paper_d3();
-  recon::CornerDetector left(rig.left), right(rig.right);
+  recon::CornerSettings settings;
+  settings.allow_avx2 = avx2;
+  recon::CornerDetector left(rig.left, settings), right(rig.right, settings);
   std::vector<recon::CornerResult> previous(eyes.size());
   for (std::size_t i = 0; i < eyes.size(); ++i) {
     (eyes[i].left ? left : right).detect_full(sim::raw_view(eyes[i].before, eyes[i].bayer), previous[i]);
@@ -138,7 +140,10 @@ void BM_Ours(benchmark::State& state, bool tracked) {
     }
     i = (i + 1) % eyes.size();
   }
-  tally.report(state, tracked ? "ours, tracked from the previous frame" : "ours, full search", cpu);
+  tally.report(state,
+               std::string(tracked ? "ours, tracked from the previous frame" : "ours, full search") +
+                   (avx2 ? "" : " (SSE2 kernels)"),
+               cpu);
   if (tracked) state.counters["tracked_eyes"] = tracked_count;
 }
 
@@ -248,6 +253,7 @@ void BM_Luminance(benchmark::State& state, bool bayer) {
 // Each run covers the 48 eyes at least once (the tallies need all of them).
 BENCHMARK_CAPTURE(BM_Ours, full_search, false)->Unit(benchmark::kMillisecond)->Iterations(96);
 BENCHMARK_CAPTURE(BM_Ours, tracked, true)->Unit(benchmark::kMillisecond)->Iterations(480);
+BENCHMARK_CAPTURE(BM_Ours, tracked_sse2, true, false)->Unit(benchmark::kMillisecond)->Iterations(480);
 BENCHMARK_CAPTURE(BM_OpenCV, findChessboardCorners_cornerSubPix, false)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(96);

@@ -85,6 +85,7 @@ CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& 
   gray8_.resize(luma_.size());
   map_ = std::make_shared<const UndistortMap>(camera_);
   work_.resize(1);
+  work_.front().use_avx2 = work_.front().use_avx2 && settings_.allow_avx2;
 }
 
 bool CornerDetector::detect(const RawImageView& image, const CornerResult* previous, CornerResult& out) {

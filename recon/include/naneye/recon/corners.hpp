@@ -101,6 +101,9 @@ struct CornerSettings {
   // allocates on every call, and ours finds every board the benchmark and tests render.
   CoarseGridSettings coarse;
   bool opencv_fallback = false;
+  // The fit's 8-lane kernels when the CPU has AVX2 + FMA; off: the SSE2 baseline every x86-64 runs
+  // (benchmarks compare both).
+  bool allow_avx2 = true;
 };
 
 class CornerDetector {
