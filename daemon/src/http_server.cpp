@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "http_internal.hpp"
+#include "naneye/daemon/result_json.hpp"
 
 namespace naneye::daemon {
 namespace http {
@@ -76,6 +77,37 @@ bool double_param(const httplib::Request& req, httplib::Response& res, const cha
   return true;
 }
 
+std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Published& p) {
+  // Each HTTP thread first looks at its own copy of the pointer, so a thread takes the mutex once
+  // per new result, not per request. The pool's threads belong to one server (httplib joins them
+  // when it stops), so a thread never sees two contexts' sequence numbers.
+  struct Local {
+    std::uint64_t seq = 0;
+    std::shared_ptr<const std::string> text;
+  };
+  thread_local Local local;
+  if (local.text && local.seq == p.seq) return local.text;
+  std::lock_guard lock(ctx.result_json_mutex);
+  if (ctx.result_json_seq != p.seq) {
+    auto text = std::make_shared<const std::string>(result_to_json(p.result).dump());
+    // An event stream behind the latest result does not evict it.
+    if (p.seq < ctx.result_json_seq) return text;
+    ctx.result_json_seq = p.seq;
+    ctx.result_json = std::move(text);
+  }
+  local = {p.seq, ctx.result_json};
+  return local.text;
+}
+
+void append_with_age(std::string& out, double age_ms, const std::string& result_json) {
+  const std::string age = nlohmann::json(age_ms).dump();
+  out.reserve(out.size() + result_json.size() + age.size() + 10);
+  out += "{\"age_ms\":";
+  out += age;
+  out += ',';
+  out.append(result_json, 1);
+}
+
 }  // namespace http
 
 HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string version)
@@ -87,11 +119,19 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   server_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
   // Short idle keep-alive so that shutdown is not held by an idle client for long.
   server_->set_keep_alive_timeout(1);
+  // httplib closes a keep-alive connection after 5 requests by default: a client polling /v1/depth
+  // then pays a TCP handshake, an accept and a hand-over to the pool every 5 requests (that halved
+  // the request rate). Each connection holds a pool thread while open, so the count stays finite:
+  // under full load a waiting connection gets a thread within ~100 requests of another one.
+  server_->set_keep_alive_max_count(100);
   // Headers and body go out in separate writes: without TCP_NODELAY, Nagle waits for the client's
   // delayed ACK (tens of ms) before sending the body.
   server_->set_tcp_nodelay(true);
   server_->set_read_timeout(5, 0);
   server_->set_write_timeout(2, 0);
+  server_->set_logger([ctx = ctx_.get()](const httplib::Request&, const httplib::Response&) {
+    ctx->requests.fetch_add(1, std::memory_order_relaxed);
+  });
   http::add_status_routes(*server_, *ctx_);
   http::add_depth_routes(*server_, *ctx_);
   http::add_frame_routes(*server_, *ctx_);
