@@ -129,8 +129,10 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   server_->set_tcp_nodelay(true);
   server_->set_read_timeout(5, 0);
   server_->set_write_timeout(2, 0);
-  server_->set_logger([ctx = ctx_.get()](const httplib::Request&, const httplib::Response&) {
+  // Counted before the handler runs, so that a client that got its answer also sees it counted.
+  server_->set_pre_routing_handler([ctx = ctx_.get()](const httplib::Request&, httplib::Response&) {
     ctx->requests.fetch_add(1, std::memory_order_relaxed);
+    return httplib::Server::HandlerResponse::Unhandled;
   });
   http::add_status_routes(*server_, *ctx_);
   http::add_depth_routes(*server_, *ctx_);

@@ -45,7 +45,7 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   counter(os, "naneye_events_clients_dropped_total", "Event-stream clients dropped for falling behind.",
           ctx.sse_dropped.load());
   gauge(os, "naneye_events_clients", "Open event-stream clients.", ctx.sse_clients.load());
-  counter(os, "naneye_http_requests_total", "HTTP requests answered (any path and status).",
+  counter(os, "naneye_http_requests_total", "HTTP requests received (any path and status).",
           ctx.requests.load());
   counter(os, "naneye_depth_served_total", "Results served by /v1/depth (status 200).",
           ctx.depth_served.load());

@@ -25,7 +25,7 @@ struct HttpContext {
   std::atomic<int> sse_clients{0};
   std::atomic<std::uint64_t> sse_dropped{0};
   std::atomic<std::uint64_t> sse_events{0};
-  std::atomic<std::uint64_t> requests{0};      // every request answered, any path or status
+  std::atomic<std::uint64_t> requests{0};      // every request routed, any path or status
   std::atomic<std::uint64_t> depth_served{0};  // /v1/depth answered 200
   std::atomic<bool> stopping{false};
   // The JSON text of the latest result served, built once for all HTTP threads (/v1/depth and
