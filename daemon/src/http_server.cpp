@@ -1,6 +1,7 @@
 #include "naneye/daemon/http_server.hpp"
 
 #include <spdlog/spdlog.h>
+#include <sys/socket.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -127,6 +128,13 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   // Headers and body go out in separate writes: without TCP_NODELAY, Nagle waits for the client's
   // delayed ACK (tens of ms) before sending the body.
   server_->set_tcp_nodelay(true);
+  // httplib listens with a backlog of 5 (compiled into Debian's library): when more connections
+  // arrive at once while the accept thread waits for a core, the kernel drops their SYNs and each
+  // client waits a second for its retransmission. bind() widens it; this notes the socket.
+  server_->set_socket_options([this](socket_t sock) {
+    httplib::default_socket_options(sock);
+    listen_fd_ = sock;
+  });
   server_->set_read_timeout(5, 0);
   server_->set_write_timeout(2, 0);
   // Counted before the handler runs, so that a client that got its answer also sees it counted.
@@ -175,6 +183,8 @@ int HttpServer::bind() {
     throw std::runtime_error("cannot bind " + s.http_host + ":" + std::to_string(port) +
                              " (in use, or the address is not local)");
   }
+  // Linux updates the backlog of a socket that already listens.
+  if (listen_fd_ >= 0) ::listen(listen_fd_, SOMAXCONN);
   return port;
 }
 

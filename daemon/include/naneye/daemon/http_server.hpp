@@ -57,6 +57,7 @@ class HttpServer {
   std::unique_ptr<httplib::Server> server_;
   std::thread thread_;
   std::atomic<bool> finished_{false};
+  int listen_fd_ = -1;  // the listening socket httplib created, to widen its backlog
 };
 
 }  // namespace naneye::daemon
