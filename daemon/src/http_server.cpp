@@ -1,7 +1,9 @@
 #include "naneye/daemon/http_server.hpp"
 
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -109,6 +111,41 @@ void append_with_age(std::string& out, double age_ms, const std::string& result_
   out.append(result_json, 1);
 }
 
+namespace {
+
+// The HTTP threads run at a lower priority than the pipeline: on two busy cores a burst of
+// requests must not take the reconstruction worker's CPU and make a live source drop pairs. Raising
+// a thread's nice value needs no privilege (the unit's sandbox allows it); it only matters when the
+// cores are contended.
+constexpr int kHttpNice = 5;
+
+void lower_this_thread_priority() {
+  thread_local const bool done = [] {
+    // Linux: PRIO_PROCESS with a thread id sets that thread's nice value alone.
+    setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kHttpNice);
+    return true;
+  }();
+  (void)done;
+}
+
+// httplib's pool, with each worker thread lowered on its first task.
+class LowPriorityPool final : public httplib::TaskQueue {
+ public:
+  explicit LowPriorityPool(std::size_t n) : pool_(n) {}
+  void enqueue(std::function<void()> fn) override {
+    pool_.enqueue([fn = std::move(fn)] {
+      lower_this_thread_priority();
+      fn();
+    });
+  }
+  void shutdown() override { pool_.shutdown(); }
+
+ private:
+  httplib::ThreadPool pool_;
+};
+
+}  // namespace
+
 }  // namespace http
 
 HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string version)
@@ -117,7 +154,7 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   ctx_->pipeline = &pipeline;
   ctx_->version = std::move(version);
   const auto threads = static_cast<std::size_t>(settings.http_threads);
-  server_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  server_->new_task_queue = [threads] { return new http::LowPriorityPool(threads); };
   // Short idle keep-alive so that shutdown is not held by an idle client for long.
   server_->set_keep_alive_timeout(1);
   // httplib closes a keep-alive connection after 5 requests by default: a client polling /v1/depth
@@ -190,6 +227,7 @@ int HttpServer::bind() {
 
 void HttpServer::start() {
   thread_ = std::thread([this] {
+    http::lower_this_thread_priority();  // the accept loop
     server_->listen_after_bind();
     finished_.store(true);
   });
