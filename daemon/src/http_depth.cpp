@@ -39,7 +39,7 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
     }
     std::string body;
     append_with_age(body, age, *text);
-    res.set_content(std::move(body), "application/json");
+    set_body(res, std::move(body), "application/json");
     ctx.depth_served.fetch_add(1, std::memory_order_relaxed);
   });
 

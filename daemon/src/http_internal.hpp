@@ -13,6 +13,8 @@
 
 namespace naneye::daemon::http {
 
+// Every text body (JSON, /metrics): sent as is, never compressed (see http_server.cpp).
+void set_body(httplib::Response& res, std::string body, const char* content_type);
 // Every error body: {"error": code, "detail": human text}.
 void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail);
 void send_json(httplib::Response& res, const nlohmann::json& body, int status = 200);

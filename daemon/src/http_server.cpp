@@ -14,9 +14,23 @@
 namespace naneye::daemon {
 namespace http {
 
+void set_body(httplib::Response& res, std::string body, const char* content_type) {
+  if (body.empty()) return res.set_content(body, content_type);
+  // Given through a sized content provider: httplib compresses a set_content body on every request
+  // whose client accepts br or gzip (browsers do), at brotli's default quality 11: ~12 ms of CPU for
+  // a 15 kB /v1/depth, ~0.3 ms with gzip, against ~30 us to serve it as is. It never compresses a
+  // sized provider's body, and the body is moved, not copied.
+  auto shared = std::make_shared<const std::string>(std::move(body));
+  const std::size_t size = shared->size();
+  res.set_content_provider(size, content_type,
+                           [shared](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                             return sink.write(shared->data() + offset, length);
+                           });
+}
+
 void send_json(httplib::Response& res, const nlohmann::json& body, int status) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  set_body(res, body.dump(), "application/json");
 }
 
 void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail) {
@@ -185,7 +199,7 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   http::add_event_routes(*server_, *ctx_);
   // Unmatched paths (and httplib's own errors) get the JSON error body too.
   server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) {
-    if (!res.body.empty()) return;
+    if (res.has_header("Content-Type")) return;  // a handler's own error body
     if (res.status == 404) {
       http::send_error(res, 404, "not_found", "no resource at " + req.path + " (see docs/http-api.md)");
     } else {

@@ -32,8 +32,8 @@ class RawConnection {
   bool connected() const { return connected_; }
 
   // Sends a GET and reads its whole response; nullopt when the server closed the connection first.
-  std::optional<RawResponse> get(const std::string& path) {
-    const std::string req = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+  std::optional<RawResponse> get(const std::string& path, const std::string& headers = "") {
+    const std::string req = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + headers + "\r\n";
     if (send(fd_, req.data(), req.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(req.size())) return {};
     std::string in;
     std::size_t blank = std::string::npos, total = 0;
@@ -149,4 +149,29 @@ TEST_F(NaneyedTest, DepthAndEventsServeTheSameTextOfAResult) {
   auto parsed = nlohmann::json::parse(a->body);
   parsed.erase("age_ms");
   EXPECT_EQ(without_age(a->body), parsed.dump());
+}
+
+TEST_F(NaneyedTest, BodiesAreNeverCompressedEvenWhenTheClientAcceptsIt) {
+  // httplib would compress each of them per request (brotli quality 11: milliseconds of CPU for one
+  // /v1/depth); naneyed sends them as they are, which any client accepts.
+  const auto file = capture(12);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
+  wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] == 12; });
+  RawConnection conn(port);
+  ASSERT_TRUE(conn.connected());
+  for (const char* path : {"/v1/depth", "/v1/status", "/metrics", "/v1/points", "/v1/nothing"}) {
+    for (const char* enc : {"br", "gzip, deflate, br", "gzip"}) {
+      const auto r = conn.get(path, std::string("Accept-Encoding: ") + enc + "\r\n");
+      ASSERT_TRUE(r) << path;
+      EXPECT_EQ(r->head.find("Content-Encoding"), std::string::npos) << path << " " << enc << "\n" << r->head;
+      if (std::string(path) == "/metrics") {
+        EXPECT_EQ(r->body.rfind("# HELP ", 0), 0u);
+      } else {
+        const auto j = nlohmann::json::parse(r->body);
+        EXPECT_EQ(j.contains("error"), std::string(path) == "/v1/nothing") << path;
+      }
+    }
+  }
+  const auto d = nlohmann::json::parse(conn.get("/v1/depth", "Accept-Encoding: br\r\n")->body);
+  EXPECT_EQ(d["pair"], 11);
 }
