@@ -2,10 +2,10 @@
 // A lean HTTP/1.1 load generator for bench_daemon: one thread, epoll, N keep-alive connections to
 // 127.0.0.1, one request in flight per connection (no pipelining), every response read in full
 // (Content-Length) and its latency recorded. It exists because a client on the same two cores as
-// the server takes CPU from it: httplib's client costs about as much per request as the server
-// (and asks for compressed bodies, which the server then compresses per request); this one costs a
-// send, a few recvs and a share of an epoll_wait per request. Reconnects when the server closes a
-// connection (its keep-alive request limit).
+// the server takes CPU from it: httplib's client threads cost about as much per request as the
+// server; this one costs a send, a few recvs and a share of an epoll_wait per request. It sends no
+// Accept-Encoding, like httplib's client and curl. Reconnects when the server closes a connection
+// (its keep-alive request limit).
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
