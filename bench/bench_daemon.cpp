@@ -4,10 +4,16 @@
 // timing-only step (board.detect = false):
 //  - allocations per frame on the capture thread and on the reconstruction worker (in-process
 //    Pipeline, max-speed replay; every operator new counted per thread);
-//  - naneyed itself: capture-to-published latency p50/p99, requests/s on /v1/depth while streaming
-//    (dropped-pair counter before and after), steady RSS.
+//  - naneyed itself: capture-to-published latency p50/p99; requests/s on /v1/depth while streaming,
+//    from keep-alive connections driven by one epoll thread (bench/http_load.hpp: it costs far less
+//    per request than the server, unlike httplib's client), counted by the client and by naneyed
+//    (naneye_depth_served_total), with request latency, the dropped-pair counter before and after,
+//    and where the cores' time went (naneyed, the client, other processes: the machine is shared);
+//    steady RSS.
 //
-//   build/bench/bench_daemon [seconds_per_phase=5] [client_threads=2] [--quick]
+//   build/bench/bench_daemon [seconds_per_phase=5] [connections=8] [--quick]
+// More connections than naneyed's http.threads (8) wait for a thread: httplib serves a connection
+// on one pool thread until it closes (after 100 requests or 1 s idle).
 // clang-format off
 #include <Eigen/Core>  // before httplib.h (its <resolv.h> defines `_res`, which Eigen trips on)
 #include <httplib.h>
@@ -31,6 +37,7 @@
 #include <vector>
 
 #include "../tests/daemon/temp_dir.hpp"
+#include "http_load.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
@@ -175,8 +182,10 @@ void serialization_cost() {
   for (int k = 0; k < reps; ++k) bytes += daemon::result_to_json(r).dump().size();
   const double us =
       std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / reps;
-  std::printf("JSON of a 48-corner result: %.1f us, %zu bytes (done once per new result per HTTP thread)\n",
-              us, bytes / reps);
+  std::printf(
+      "JSON of a 48-corner result: %.1f us, %zu bytes (done once per new result, shared by the HTTP "
+      "threads)\n",
+      us, bytes / reps);
 }
 
 struct Child {
@@ -197,8 +206,49 @@ long rss_kb(pid_t pid, const char* key) {
   return -1;
 }
 
+// CPU seconds (user + system) of naneyed, of this process, and of the whole machine, read from /proc.
+struct CpuSample {
+  double wall_s = 0, naneyed_s = 0, self_s = 0, machine_busy_s = 0, machine_idle_s = 0;
+};
+
+double proc_cpu_s(const std::string& stat_path) {
+  std::ifstream in(stat_path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Fields after the command name, which is in parentheses and may hold spaces.
+  std::istringstream fields(text.substr(text.rfind(')') + 2));
+  std::string f;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && fields >> f; ++i)
+    if (i >= 14) ticks += std::stod(f);  // utime, stime
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+CpuSample cpu_now(pid_t naneyed) {
+  CpuSample s;
+  s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  s.naneyed_s = proc_cpu_s("/proc/" + std::to_string(naneyed) + "/stat");
+  s.self_s = proc_cpu_s("/proc/self/stat");
+  std::ifstream in("/proc/stat");
+  std::string cpu;
+  double v[8] = {};  // user nice system idle iowait irq softirq steal
+  in >> cpu;
+  for (double& x : v) in >> x;
+  const double tick = static_cast<double>(sysconf(_SC_CLK_TCK));
+  s.machine_idle_s = (v[3] + v[4]) / tick;
+  s.machine_busy_s = (v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / tick;
+  return s;
+}
+
+// A counter from naneyed's /metrics ("name value" line).
+double metric(httplib::Client& c, const std::string& name) {
+  const auto m = c.Get("/metrics");
+  if (!m) return 0;
+  const auto at = m->body.find("\n" + name + " ");
+  return at == std::string::npos ? 0 : std::atof(m->body.c_str() + at + name.size() + 2);
+}
+
 void service_figures(const std::filesystem::path& dir, const std::filesystem::path& capture, double seconds,
-                     int threads, bool detect) {
+                     int connections, bool detect) {
   const auto log = dir / "naneyed.log";
   const auto config = dir / "naneyed.toml";
   std::ofstream(config) << "[board]\ndetect = " << (detect ? "true" : "false") << "\n";
@@ -237,7 +287,10 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   auto status = [&] { return nlohmann::json::parse(c.Get("/v1/status")->body); };
 
   // Phase 1: streaming at 62 fps, no HTTP load.
+  const auto idle0 = cpu_now(child.pid);
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  const auto idle1 = cpu_now(child.pid);
+  const double streaming_share = (idle1.naneyed_s - idle0.naneyed_s) / (idle1.wall_s - idle0.wall_s);
   auto s1 = status();
   std::printf(
       "naneyed replaying at %.1f fps: capture-to-published p50 %.3f ms, p99 %.3f ms, max %.3f ms (%d pairs); "
@@ -253,33 +306,42 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
                 j["board_found"].get<bool>() ? "true" : "false", d->body.size());
   }
 
-  // Phase 2: keep-alive clients hammering /v1/depth while it streams.
-  std::atomic<bool> stop{false};
-  std::atomic<std::uint64_t> ok{0}, failed{0};
-  std::vector<std::thread> clients;
-  for (int t = 0; t < threads; ++t) {
-    clients.emplace_back([&] {
-      httplib::Client cl("127.0.0.1", port);
-      cl.set_keep_alive(true);
-      cl.set_tcp_nodelay(true);
-      while (!stop.load(std::memory_order_relaxed)) {
-        auto r = cl.Get("/v1/depth");
-        (r && r->status == 200 ? ok : failed).fetch_add(1, std::memory_order_relaxed);
-      }
-    });
-  }
-  const auto t0 = std::chrono::steady_clock::now();
-  std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
-  stop.store(true);
-  for (auto& t : clients) t.join();
-  const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Phase 2: keep-alive connections hammering /v1/depth while it streams. The rate is given as the
+  // client counted it and as naneyed counted it (naneye_depth_served_total), with where the two
+  // cores' time went during the load.
+  const auto served0 = metric(c, "naneye_depth_served_total");
+  const auto cpu0 = cpu_now(child.pid);
+  auto load = bench::http_load(port, "/v1/depth", connections, seconds);
+  const auto cpu1 = cpu_now(child.pid);
+  const auto served1 = metric(c, "naneye_depth_served_total");
   auto s2 = status();
+  const double el = load.seconds;
+  const double per_s = static_cast<double>(load.ok) / el;
   std::printf(
-      "/v1/depth under load (%d keep-alive client threads in this process, same 2 cores): %.0f req/s, %llu "
-      "failed; pairs processed during the load %lld, dropped pairs before %lld after %lld; "
-      "capture-to-published "
-      "p99 %.3f ms\n",
-      threads, static_cast<double>(ok.load()) / el, static_cast<unsigned long long>(failed.load()),
+      "/v1/depth under load (%d keep-alive connections, one request in flight each, from one epoll thread "
+      "of this process on the same cores): %.0f req/s by the client, %.0f req/s by naneyed's "
+      "naneye_depth_served_total, %llu failed, %llu connections opened; request latency p50 %.3f ms p99 "
+      "%.3f ms\n",
+      connections, per_s, (served1 - served0) / el, static_cast<unsigned long long>(load.failed),
+      static_cast<unsigned long long>(load.connects), load.percentile_ms(0.50), load.percentile_ms(0.99));
+  const double wall = cpu1.wall_s - cpu0.wall_s;
+  const double naneyed_s = cpu1.naneyed_s - cpu0.naneyed_s, self_s = cpu1.self_s - cpu0.self_s;
+  const double busy_s = cpu1.machine_busy_s - cpu0.machine_busy_s;
+  const double total_s = busy_s + cpu1.machine_idle_s - cpu0.machine_idle_s;
+  const double http_s = naneyed_s - streaming_share * wall;  // above what streaming alone took
+  std::printf(
+      "CPU during the load, %% of one core (the machine has %ld cores, shared): naneyed %.0f%% (streaming "
+      "alone "
+      "took %.0f%%: the HTTP side %.1f us per request), load client %.0f%% (%.1f us per request), other "
+      "processes %.0f%%, idle %.0f%%\n",
+      sysconf(_SC_NPROCESSORS_ONLN), 100 * naneyed_s / wall, 100 * streaming_share,
+      1e6 * http_s / static_cast<double>(load.ok), 100 * load.cpu_seconds / wall,
+      1e6 * load.cpu_seconds / static_cast<double>(load.ok),
+      100 * std::max(0.0, busy_s - naneyed_s - self_s) / wall, 100 * (total_s - busy_s) / wall);
+  std::printf(
+      "while loaded: pairs processed %lld, dropped pairs before %lld after %lld; capture-to-published p99 "
+      "%.3f "
+      "ms (over the whole run)\n",
       s2["pairs"]["processed"].get<long long>() - s1["pairs"]["processed"].get<long long>(),
       s1["counters"]["pairs_dropped"].get<long long>(), s2["counters"]["pairs_dropped"].get<long long>(),
       s2["capture_to_publish_ms"]["p99"].get<double>());
@@ -294,7 +356,7 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
 
 int main(int argc, char** argv) {
   double seconds = 5.0;
-  int threads = 2, rendered = 124;  // 124 poses: 2 s forwards, 2 s back (246 pairs, ~4 s per loop)
+  int connections = 8, rendered = 124;  // 124 poses: 2 s forwards, 2 s back (246 pairs, ~4 s per loop)
   int positional = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -306,7 +368,7 @@ int main(int argc, char** argv) {
     } else if (positional++ == 0) {
       seconds = std::atof(argv[i]);
     } else {
-      threads = std::atoi(argv[i]);
+      connections = std::atoi(argv[i]);
     }
   }
   TempDir dir;
@@ -318,7 +380,7 @@ int main(int argc, char** argv) {
   allocations_per_frame(capture, pairs, true);
   allocations_per_frame(capture, pairs, false);
   serialization_cost();
-  service_figures(dir.path, capture, seconds, threads, true);
-  service_figures(dir.path, capture, seconds, threads, false);
+  service_figures(dir.path, capture, seconds, connections, true);
+  service_figures(dir.path, capture, seconds, connections, false);
   return 0;
 }

@@ -17,14 +17,6 @@ void no_result(httplib::Response& res) {
   send_error(res, 503, "no_result", "no stereo pair has been reconstructed yet");
 }
 
-// Serializing a result costs far more than serving it, and many requests ask for the same one: each
-// HTTP thread keeps the JSON of the last result it served (nlohmann sorts keys, so "age_ms" is
-// always first and is spliced in front).
-struct DepthCache {
-  std::uint64_t seq = 0;
-  std::string body_tail;  // the object without its opening brace
-};
-
 }  // namespace
 
 void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
@@ -32,14 +24,11 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
     if (!only_params(req, res, {"max_age_ms"})) return;
     std::optional<std::int64_t> max_age;
     if (!int_param(req, res, "max_age_ms", 0, 86'400'000, max_age)) return;
-    thread_local DepthCache cache;
     double age = 0;
-    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t seq) {
+    std::shared_ptr<const std::string> text;
+    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t) {
       age = age_ms(p);
-      if (cache.seq != seq) {
-        cache.body_tail = result_to_json(p.result).dump().substr(1);
-        cache.seq = seq;
-      }
+      text = result_json_text(ctx, p);
     });
     if (!have) return no_result(res);
     if (max_age && age > static_cast<double>(*max_age)) {
@@ -48,9 +37,10 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
                     static_cast<long long>(*max_age));
       return send_error(res, 503, "stale_result", detail);
     }
-    std::string body = "{\"age_ms\":" + nlohmann::json(age).dump() + ",";
-    body += cache.body_tail;
-    res.set_content(std::move(body), "application/json");
+    std::string body;
+    append_with_age(body, age, *text);
+    set_body(res, std::move(body), "application/json");
+    ctx.depth_served.fetch_add(1, std::memory_order_relaxed);
   });
 
   svr.Get("/v1/depth/at", [&ctx](const httplib::Request& req, httplib::Response& res) {

@@ -4,7 +4,6 @@
 #include <thread>
 
 #include "http_internal.hpp"
-#include "naneye/daemon/result_json.hpp"
 
 namespace naneye::daemon::http {
 namespace {
@@ -64,9 +63,10 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
           }
           std::string event;
           const bool held = results.read_seq(stream->cursor, [&](const Published& p) {
-            auto j = result_to_json(p.result);
-            j["age_ms"] = static_cast<double>(monotonic_ns() - p.published_ns) * 1e-6;
-            event = "id: " + std::to_string(p.seq) + "\nevent: result\ndata: " + j.dump() + "\n\n";
+            const double age = static_cast<double>(monotonic_ns() - p.published_ns) * 1e-6;
+            event = "id: " + std::to_string(p.seq) + "\nevent: result\ndata: ";
+            append_with_age(event, age, *result_json_text(c, p));
+            event += "\n\n";
           });
           if (!held) {
             c.sse_dropped.fetch_add(1);

@@ -13,6 +13,8 @@
 
 namespace naneye::daemon::http {
 
+// Every text body (JSON, /metrics): sent as is, never compressed (see http_server.cpp).
+void set_body(httplib::Response& res, std::string body, const char* content_type);
 // Every error body: {"error": code, "detail": human text}.
 void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail);
 void send_json(httplib::Response& res, const nlohmann::json& body, int status = 200);
@@ -25,6 +27,12 @@ bool int_param(const httplib::Request& req, httplib::Response& res, const char* 
                std::int64_t hi, std::optional<std::int64_t>& out);
 bool double_param(const httplib::Request& req, httplib::Response& res, const char* name,
                   std::optional<double>& out);
+
+// result_to_json(p.result).dump(), serialized once per result for every HTTP thread. nlohmann sorts
+// keys, so a caller splices "age_ms" (the first key) in after the opening brace.
+std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Published& p);
+// Appends that text to `out` with "age_ms" (formatted as nlohmann formats a double) as its first key.
+void append_with_age(std::string& out, double age_ms, const std::string& result_json);
 
 nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s);
 std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s);

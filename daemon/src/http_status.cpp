@@ -85,7 +85,7 @@ void add_status_routes(httplib::Server& svr, HttpContext& ctx) {
   });
   svr.Get("/metrics", [&ctx](const httplib::Request& req, httplib::Response& res) {
     if (!only_params(req, res, {})) return;
-    res.set_content(metrics_text(ctx, ctx.pipeline->status()), "text/plain; version=0.0.4; charset=utf-8");
+    set_body(res, metrics_text(ctx, ctx.pipeline->status()), "text/plain; version=0.0.4; charset=utf-8");
   });
 }
 

@@ -45,6 +45,10 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   counter(os, "naneye_events_clients_dropped_total", "Event-stream clients dropped for falling behind.",
           ctx.sse_dropped.load());
   gauge(os, "naneye_events_clients", "Open event-stream clients.", ctx.sse_clients.load());
+  counter(os, "naneye_http_requests_total", "HTTP requests received (any path and status).",
+          ctx.requests.load());
+  counter(os, "naneye_depth_served_total", "Results served by /v1/depth (status 200).",
+          ctx.depth_served.load());
   gauge(os, "naneye_sensor_fps_left", "Frame rate of the left sensor (its own clock).", s.fps_left);
   gauge(os, "naneye_sensor_fps_right", "Frame rate of the right sensor (its own clock).", s.fps_right);
   gauge(os, "naneye_pair_offset_seconds", "Right minus left timestamp of the latest pair.",

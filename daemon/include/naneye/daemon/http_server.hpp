@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -24,7 +25,14 @@ struct HttpContext {
   std::atomic<int> sse_clients{0};
   std::atomic<std::uint64_t> sse_dropped{0};
   std::atomic<std::uint64_t> sse_events{0};
+  std::atomic<std::uint64_t> requests{0};      // every request routed, any path or status
+  std::atomic<std::uint64_t> depth_served{0};  // /v1/depth answered 200
   std::atomic<bool> stopping{false};
+  // The JSON text of the latest result served, built once for all HTTP threads (/v1/depth and
+  // /v1/events); only HTTP threads take the mutex, never the pipeline.
+  std::mutex result_json_mutex;
+  std::uint64_t result_json_seq = 0;
+  std::shared_ptr<const std::string> result_json;
 };
 
 class HttpServer {
@@ -49,6 +57,7 @@ class HttpServer {
   std::unique_ptr<httplib::Server> server_;
   std::thread thread_;
   std::atomic<bool> finished_{false};
+  int listen_fd_ = -1;  // the listening socket httplib created, to widen its backlog
 };
 
 }  // namespace naneye::daemon

@@ -19,7 +19,7 @@ struct Settings {
   // [http]
   std::string http_host = "127.0.0.1";
   int http_port = 8080;  // 0: an ephemeral port, logged once bound
-  int http_threads = 8;  // worker threads of the HTTP server; each open /v1/events stream holds one
+  int http_threads = 8;  // HTTP server threads; each open connection or /v1/events stream holds one
   // [pipeline]
   double corner_sigma_px = 0.05;        // corner noise used for the depth sigmas
   int max_result_age_ms = 500;          // /readyz fails when the latest result is older

@@ -1,0 +1,177 @@
+// naneyed's HTTP serving itself: keep-alive connections, the request counters of /metrics, and the
+// one serialization of a result shared by /v1/depth and /v1/events.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "naneyed_fixture.hpp"
+
+using namespace naneye::daemon::test;
+
+namespace {
+
+// One raw HTTP/1.1 response read off a socket: status, headers block, body.
+struct RawResponse {
+  int status = 0;
+  std::string head, body;
+};
+
+class RawConnection {
+ public:
+  explicit RawConnection(int port) : fd_(socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+    timeval tv{5, 0};
+    setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  }
+  ~RawConnection() { close(fd_); }
+  bool connected() const { return connected_; }
+
+  // Sends a GET and reads its whole response; nullopt when the server closed the connection first.
+  std::optional<RawResponse> get(const std::string& path, const std::string& headers = "") {
+    const std::string req = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + headers + "\r\n";
+    if (send(fd_, req.data(), req.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(req.size())) return {};
+    std::string in;
+    std::size_t blank = std::string::npos, total = 0;
+    char buf[8192];
+    while (blank == std::string::npos || in.size() < total) {
+      const ssize_t n = recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) return {};
+      in.append(buf, static_cast<std::size_t>(n));
+      if (blank == std::string::npos && (blank = in.find("\r\n\r\n")) != std::string::npos) {
+        const auto cl = in.find("Content-Length: ");
+        if (cl == std::string::npos || cl > blank) return {};
+        total = blank + 4 + std::stoull(in.substr(cl + 16));
+      }
+    }
+    RawResponse r;
+    r.status = std::stoi(in.substr(9, 3));
+    r.head = in.substr(0, blank);
+    r.body = in.substr(blank + 4);
+    return r;
+  }
+
+  // True when the server has closed its side (recv sees the end of the stream).
+  bool closed_by_server() {
+    char c;
+    return recv(fd_, &c, 1, 0) == 0;
+  }
+
+ private:
+  int fd_;
+  bool connected_ = false;
+};
+
+double metric(httplib::Client& c, const std::string& name) {
+  const auto m = c.Get("/metrics");
+  if (!m) return -1;
+  const auto at = m->body.find("\n" + name + " ");
+  return at == std::string::npos ? -1 : std::stod(m->body.substr(at + name.size() + 2));
+}
+
+// The body without its "age_ms" member, which /v1/depth and /v1/events put first.
+std::string without_age(const std::string& json) {
+  EXPECT_EQ(json.rfind("{\"age_ms\":", 0), 0u) << json.substr(0, 40);
+  const auto comma = json.find(',');
+  return comma == std::string::npos ? json : "{" + json.substr(comma + 1);
+}
+
+}  // namespace
+
+TEST_F(NaneyedTest, AKeepAliveConnectionServesAHundredRequestsAndEachIsCounted) {
+  const auto file = capture(40);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n");
+  wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 3; });
+  const double served0 = metric(*client, "naneye_depth_served_total");
+  const double requests0 = metric(*client, "naneye_http_requests_total");
+  ASSERT_GE(served0, 0);
+  ASSERT_GE(requests0, 0);
+
+  // httplib's default would close the connection after 5 requests; naneyed keeps it for 100, then
+  // closes it so that a waiting connection gets the thread.
+  RawConnection conn(port);
+  ASSERT_TRUE(conn.connected());
+  for (int k = 1; k <= 100; ++k) {
+    const auto r = conn.get("/v1/depth");
+    ASSERT_TRUE(r) << "connection closed by the server before request " << k;
+    ASSERT_EQ(r->status, 200) << r->body;
+    const auto j = nlohmann::json::parse(r->body);
+    EXPECT_GE(j["age_ms"].get<double>(), 0.0);
+    EXPECT_EQ(j["board_found"], false);
+    EXPECT_EQ(r->head.find("Connection: close") != std::string::npos, k == 100) << "request " << k;
+  }
+  EXPECT_TRUE(conn.closed_by_server());
+
+  // Two 400s and a 404 count as requests, not as served results.
+  EXPECT_EQ(get_json("/v1/depth?max_age_ms=x", 400)["error"], "bad_parameter");
+  EXPECT_EQ(get_json("/v1/depth?nonsense=1", 400)["error"], "bad_parameter");
+  EXPECT_EQ(get_json("/v1/nothing", 404)["error"], "not_found");
+  EXPECT_EQ(metric(*client, "naneye_depth_served_total") - served0, 100);
+  // Counted before their handler runs: the /metrics that read requests0 counted itself before, the
+  // two /metrics reads since (served, then this one) inside: 100 + 3 + 2.
+  EXPECT_EQ(metric(*client, "naneye_http_requests_total") - requests0, 105);
+}
+
+TEST_F(NaneyedTest, DepthAndEventsServeTheSameTextOfAResult) {
+  const int n = 12;
+  const auto file = capture(n);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
+  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+
+  const auto a = client->Get("/v1/depth");
+  const auto b = client->Get("/v1/depth");
+  ASSERT_TRUE(a && b);
+  ASSERT_EQ(a->status, 200);
+  const auto pair = nlohmann::json::parse(a->body)["pair"].get<int>();
+  EXPECT_EQ(pair, n - 1);
+  EXPECT_EQ(without_age(a->body), without_age(b->body));
+
+  // The event for the same result (the latest, id n) and an older one (id n - 1).
+  std::vector<std::string> data;
+  std::string buffer;
+  client->Get(
+      ("/v1/events?last_event_id=" + std::to_string(n - 2)).c_str(), [&](const char* d, std::size_t len) {
+        buffer.append(d, len);
+        for (std::size_t end; (end = buffer.find("\n\n")) != std::string::npos; buffer.erase(0, end + 2)) {
+          const auto at = buffer.find("data: ");
+          if (at < end) data.push_back(buffer.substr(at + 6, end - at - 6));
+        }
+        return data.size() < 2;
+      });
+  ASSERT_EQ(data.size(), 2u);
+  EXPECT_EQ(nlohmann::json::parse(data[0])["pair"], n - 2);
+  EXPECT_EQ(without_age(data[1]), without_age(a->body));
+  // And the text is exactly nlohmann's serialization of the same object.
+  auto parsed = nlohmann::json::parse(a->body);
+  parsed.erase("age_ms");
+  EXPECT_EQ(without_age(a->body), parsed.dump());
+}
+
+TEST_F(NaneyedTest, BodiesAreNeverCompressedEvenWhenTheClientAcceptsIt) {
+  // httplib would compress each of them per request (brotli quality 11: milliseconds of CPU for one
+  // /v1/depth); naneyed sends them as they are, which any client accepts.
+  const auto file = capture(12);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
+  wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] == 12; });
+  RawConnection conn(port);
+  ASSERT_TRUE(conn.connected());
+  for (const char* path : {"/v1/depth", "/v1/status", "/metrics", "/v1/points", "/v1/nothing"}) {
+    for (const char* enc : {"br", "gzip, deflate, br", "gzip"}) {
+      const auto r = conn.get(path, std::string("Accept-Encoding: ") + enc + "\r\n");
+      ASSERT_TRUE(r) << path;
+      EXPECT_EQ(r->head.find("Content-Encoding"), std::string::npos) << path << " " << enc << "\n" << r->head;
+      if (std::string(path) == "/metrics") {
+        EXPECT_EQ(r->body.rfind("# HELP ", 0), 0u);
+      } else {
+        const auto j = nlohmann::json::parse(r->body);
+        EXPECT_EQ(j.contains("error"), std::string(path) == "/v1/nothing") << path;
+      }
+    }
+  }
+  const auto d = nlohmann::json::parse(conn.get("/v1/depth", "Accept-Encoding: br\r\n")->body);
+  EXPECT_EQ(d["pair"], 11);
+}
