@@ -120,7 +120,8 @@ class CornerDetector {
   const CameraModel& camera() const { return camera_; }
   const CornerSettings& settings() const { return settings_; }
   CornerFailure last_failure() const { return failure_; }
-  // The luminance image of the last detect() call (float DN, width x height), for diagnostics.
+  // The luminance image of the last detect() call (float DN, width x height), for diagnostics. After
+  // a tracked detection only the board's rows are current (tracking computes no others).
   const std::vector<float>& luminance() const { return luma_; }
 
  private:
