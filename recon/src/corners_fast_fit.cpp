@@ -316,7 +316,7 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   double used = static_cast<double>(w.wt.head(n).sum());
   // A defect pixel the luminance's repair cannot see (a hot or dead pixel on an edge lies between its
   // neighbours' values, not beyond all of them) adds ~30 DN to the RMS of a 15 x 15 window: enough to
-  // reject the corner (3 of the study's 57 boards, at 70-74 mm). A window whose fit is poorer than
+  // reject the corner (3 of the study's 57 boards). A window whose fit is poorer than
   // almost any other (RMS > 5 % of the contrast: the 99.9th percentile of normal corners is ~3.7 %)
   // gets its residuals checked; up to kMaxOutliers pixels beyond 4x the RMS and 30 % of the contrast
   // lose their weight and the fit runs again from where it is.
