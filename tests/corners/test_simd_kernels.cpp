@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -24,14 +25,15 @@ std::vector<ShapeFn> shape_kernels() {
 }
 
 TEST(SimdKernels, ErfAndGaussianMatchTheCLibrary) {
-  // u1 = yx - qx with the first edge's normal along x and k = 1: E1 = erf(yx), G1 = exp(-yx^2).
+  // u1 = yx - qx with the first edge's normal along x and k = 1: E1 = erf(yx), G1 = exp(-yx^2), for
+  // yx over [-9.5, 9.5] in steps of 0.00172.
   constexpr int n = 368;
   std::vector<float> yx(n), yy(n, 0.0f), U1(n), U2(n), E1(n), E2(n), G1(n), G2(n), S(n);
   for (const ShapeFn shape : shape_kernels()) {
     double worst_erf = 0, worst_gauss = 0;
     for (int block = 0; block < 30; ++block) {
       for (int i = 0; i < n; ++i)
-        yx[static_cast<std::size_t>(i)] = -9.5f + 0.00017f * static_cast<float>(block * n + i);
+        yx[static_cast<std::size_t>(i)] = -9.5f + 0.00172f * static_cast<float>(block * n + i);
       shape(simd::ShapeParams{0, 0, 1, 0, 0, 1, 1}, yx.data(), yy.data(), n, U1.data(), U2.data(), E1.data(),
             E2.data(), G1.data(), G2.data(), S.data());
       for (std::size_t i = 0; i < n; ++i) {
@@ -48,9 +50,11 @@ TEST(SimdKernels, ErfAndGaussianMatchTheCLibrary) {
         EXPECT_EQ(E2[i], 0.0f);  // u2 = yy = 0
       }
     }
-    // A&S 7.1.26 is good to 1.5e-7; the float evaluation adds a few ulp.
-    EXPECT_LT(worst_erf, 5e-7);
-    EXPECT_LT(worst_gauss, 5e-7);
+    // A&S 7.1.26 is good to 1.5e-7; evaluating 1 - t poly(t) exp(-z^2) in float adds a few ulp of
+    // 1 (6e-8 each): measured 4.2e-7 (4 lanes) and 3.8e-7 (8 lanes). Expf: measured 8e-8.
+    std::printf("erf worst %.2e, exp(-z^2) worst relative %.2e\n", worst_erf, worst_gauss);
+    EXPECT_LT(worst_erf, 6e-7);
+    EXPECT_LT(worst_gauss, 2e-7);
   }
 }
 
