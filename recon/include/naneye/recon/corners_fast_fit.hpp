@@ -1,6 +1,7 @@
 #pragma once
-// The per-frame saddle fit of the corner detector, in float with vectorised (Eigen array) inner
-// loops and the window's undistorted coordinates read from a per-camera UndistortMap. Same model
+// The per-frame saddle fit of the corner detector, in float with vectorised inner loops (SSE2 or
+// AVX2, recon/src/corners_simd.hpp) and the window's undistorted coordinates read from a per-camera
+// UndistortMap. Same model
 // as fit_saddle (corners_refine.hpp):
 //   I = a + g . d + (b + h . d) * erf(u1 / (sqrt2 s)) * erf(u2 / (sqrt2 s)),  u_k = n_k . (y - q)
 // in two variants:
@@ -25,13 +26,13 @@ struct EdgeDirections {
   bool normalized_ok = false;
 };
 
-// Work space of one fit (~25 KB): owned by the caller and reused, so a fit allocates nothing.
+// Work space of one fit (~50 KB): owned by the caller and reused, so a fit allocates nothing.
 struct FastFitScratch {
   static constexpr int kMaxHalf = 9;      // window half size incl. the taper: radius <= 8
   static constexpr int kMaxPixels = 368;  // (2 * 9 + 1)^2 = 361, rounded up to whole 8-float vectors
   using Arr = Eigen::Array<float, Eigen::Dynamic, 1, 0, kMaxPixels, 1>;
   Arr dx, dy, yx, yy, val, wt;  // the window: offsets / half, local coordinates, pixel values, weights
-  Arr r, E1, E2, G1, G2, S, C, U1, U2, Z;
+  Arr r, E1, E2, G1, G2, S, U1, U2;
   std::array<Arr, 11> J, Jw;  // Jacobian columns and their weighted copies
   // The fit's innermost loops 8 floats at a time (AVX2 + FMA) when this CPU has them, else 4
   // (SSE2); tests turn it off to compare both.
