@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "cli_inputs.hpp"
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/corners_stereo.hpp"
@@ -70,12 +71,7 @@ std::vector<InputUri> expand_input(const std::string& input) {
   }
   if (!is_uri && !std::filesystem::exists(input))
     throw std::runtime_error(input + ": no such file or folder");
-  std::string uri = is_uri ? input : "file://" + input;
-  // Replaying a file at max speed hands every pair over (lossless); real time would drop none either
-  // but take the capture's duration.
-  if (uri.rfind("file://", 0) == 0 && uri.find("speed=") == std::string::npos)
-    uri += (uri.find('?') == std::string::npos ? "?" : "&") + std::string("speed=max");
-  uris.push_back({uri, input});
+  uris.push_back({lossless_input_uri(input), input});
   return uris;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "calibrate_views.hpp"
+#include "cli_inputs.hpp"
 #include "commands.hpp"
 #include "naneye/recon/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
@@ -31,14 +32,6 @@ struct CalibrateOptions {
   int max_views = 100;
   int train_views = 10;
 };
-
-void parse_pattern(const std::string& text, int& rows, int& cols) {
-  char x = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d", &rows, &x, &cols) != 3 || (x != 'x' && x != 'X') || rows < 2 ||
-      cols < 2 || rows * cols > recon::kMaxCorners)
-    throw std::invalid_argument("--pattern must be ROWSxCOLS inner corners (e.g. 6x8), at most " +
-                                std::to_string(recon::kMaxCorners) + " corners; got '" + text + "'");
-}
 
 // The bundle is dense (its Jacobian holds 6 columns per view), so a long recording is thinned to
 // evenly spaced views: consecutive pairs of a video add little that their neighbours do not.

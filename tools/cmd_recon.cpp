@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_inputs.hpp"
 #include "commands.hpp"
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
@@ -29,22 +30,6 @@ struct ReconOptions {
   bool no_tracking = false;
   long long max_pairs = -1;
 };
-
-// A plain path, or a file:// URI without a speed, replays at max speed (lossless).
-std::string input_uri(const std::string& input) {
-  std::string uri = input.find("://") == std::string::npos ? "file://" + input : input;
-  if (uri.rfind("file://", 0) == 0 && uri.find("speed=") == std::string::npos)
-    uri += (uri.find('?') == std::string::npos ? "?" : "&") + std::string("speed=max");
-  return uri;
-}
-
-void parse_pattern(const std::string& text, int& rows, int& cols) {
-  char x = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d", &rows, &x, &cols) != 3 || (x != 'x' && x != 'X') || rows < 2 ||
-      cols < 2 || rows * cols > recon::kMaxCorners)
-    throw std::invalid_argument("--pattern must be ROWSxCOLS inner corners (e.g. 6x8), at most " +
-                                std::to_string(recon::kMaxCorners) + " corners; got '" + text + "'");
-}
 
 void print_line(const recon::PairResult& r) {
   if (!r.board_found) {
@@ -77,7 +62,7 @@ void run_recon(const ReconOptions& o) {
 
   auto processor = daemon::make_processor(settings);
   processor->set_rig(rig);
-  auto source = daemon::make_source_registry().open(input_uri(o.input));
+  auto source = daemon::make_source_registry().open(lossless_input_uri(o.input));
   source->start();
   auto result = std::make_unique<recon::PairResult>();
   long long pairs = 0, found = 0;
