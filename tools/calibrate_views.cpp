@@ -110,10 +110,7 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
     while (max_pairs <= 0 || static_cast<long long>(index) < max_pairs) {
       driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
       if (!pair) {
-        const auto st = source->state();
-        if (st == driver::SourceState::finished || st == driver::SourceState::failed ||
-            st == driver::SourceState::stopped)
-          break;
+        if (driver::has_ended(source->state())) break;
         continue;
       }
       ++out.pairs;

@@ -111,10 +111,7 @@ void run_replay(const ReplayOptions& o) {
   for (;;) {
     driver::PairPtr p = source->next(std::chrono::milliseconds(500));
     if (!p) {
-      const auto s = source->state();
-      if (s == driver::SourceState::finished || s == driver::SourceState::failed ||
-          s == driver::SourceState::stopped)
-        break;
+      if (driver::has_ended(source->state())) break;
       continue;
     }
     ++pairs;

@@ -69,10 +69,7 @@ void run_recon(const ReconOptions& o) {
   while (o.max_pairs < 0 || pairs < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
     if (!pair) {
-      const auto st = source->state();
-      if (st == driver::SourceState::finished || st == driver::SourceState::failed ||
-          st == driver::SourceState::stopped)
-        break;
+      if (driver::has_ended(source->state())) break;
       continue;
     }
     processor->process(*pair, *result);

@@ -22,4 +22,8 @@ const char* to_string(SourceState s) {
   return "unknown";
 }
 
+bool has_ended(SourceState s) {
+  return s == SourceState::finished || s == SourceState::failed || s == SourceState::stopped;
+}
+
 }  // namespace naneye::driver

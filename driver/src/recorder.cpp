@@ -57,10 +57,6 @@ class NeydTap : public RawTap {
   NeydWriter& w_;
 };
 
-bool terminal(SourceState s) {
-  return s == SourceState::finished || s == SourceState::failed || s == SourceState::stopped;
-}
-
 }  // namespace
 
 RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const RecordLimits& limits,
@@ -92,7 +88,7 @@ RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const
     PairPtr p = source.next(std::chrono::duration_cast<std::chrono::milliseconds>(wait) +
                             std::chrono::milliseconds(1));
     if (!p) {
-      if (terminal(source.state())) break;
+      if (has_ended(source.state())) break;
       continue;
     }
     ++sum.pairs;

@@ -17,6 +17,8 @@ namespace naneye::driver {
 
 enum class SourceState { starting, streaming, waiting_for_device, stalled, finished, failed, stopped };
 const char* to_string(SourceState s);
+// True once a source delivers no more pairs: finished, failed or stopped (a consumer's loop ends).
+bool has_ended(SourceState s);
 
 // Every counter the parser, the pairer and the backend keep. Monotonic; read as a snapshot.
 struct SourceCounters {
