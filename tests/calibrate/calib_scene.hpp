@@ -6,18 +6,13 @@
 #include <random>
 #include <vector>
 
+#include "../support/paper_rig.hpp"
 #include "naneye/recon/calibrate.hpp"
 #include "naneye/recon/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 
 namespace naneye::test {
-
-inline const recon::StereoRig& paper_d3_rig() {
-  static const recon::StereoRig rig =
-      recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
-  return rig;
-}
 
 inline recon::BoardGeometry recon_board() {
   return {6, 8, 5.99};

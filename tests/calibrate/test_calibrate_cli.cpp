@@ -42,7 +42,7 @@ TEST_F(CalibrateCli, WritesACalibrationThatLoadRigReads) {
   EXPECT_NE(r.out.find("skipped"), std::string::npos);  // the pairs without a full board are counted
   const recon::StereoRig rig = recon::load_rig(out);
   ASSERT_TRUE(rig.sigmas.M1 && rig.sigmas.D2 && rig.sigmas.om && rig.sigmas.T);
-  const auto& truth = test::paper_d3_rig();
+  const auto& truth = test::paper_d3();
   // 15 views of real renders and detections: the truth that rendered them within 3 sigma of the file's
   // every estimate, with plausible sigmas.
   auto within = [](double estimate, double want, double sigma, const char* what) {

@@ -28,7 +28,7 @@ recon::StereoRig without_k3(const recon::StereoRig& rig) {
 }  // namespace
 
 TEST(CalibrateOptions, FixK3GivesZeroAndZeroSigma) {
-  const recon::StereoRig truth = without_k3(test::paper_d3_rig());
+  const recon::StereoRig truth = without_k3(test::paper_d3());
   const auto views = test::noisy_views(truth, test::sample_poses(truth, 12, 21), 0.1, 22);
   recon::CalibrationSettings s;
   s.fix_k3 = true;
@@ -50,7 +50,7 @@ TEST(CalibrateOptions, FixK3GivesZeroAndZeroSigma) {
 }
 
 TEST(CalibrateOptions, TangentialTermsRecovered) {
-  recon::StereoRig truth = test::paper_d3_rig();
+  recon::StereoRig truth = test::paper_d3();
   recon::Distortion d = truth.left.distortion();
   d.p1 = 0.003;
   d.p2 = -0.002;
@@ -72,7 +72,7 @@ TEST(CalibrateOptions, TangentialTermsRecovered) {
 }
 
 TEST(CalibrateOptions, OneEyedViewsAreUsedAndEmptyViewsSkipped) {
-  const auto& rig = test::paper_d3_rig();
+  const auto& rig = test::paper_d3();
   auto views = test::noisy_views(rig, test::sample_poses(rig, 10, 41), 0.1, 42);
   views[2].right.clear();   // the left eye only
   views[5].left.clear();    // the right eye only
@@ -91,7 +91,7 @@ TEST(CalibrateOptions, OneEyedViewsAreUsedAndEmptyViewsSkipped) {
 }
 
 TEST(CalibrateOptions, RefusesTooFewViewsAndNoStereo) {
-  const auto& rig = test::paper_d3_rig();
+  const auto& rig = test::paper_d3();
   auto views = test::noisy_views(rig, test::sample_poses(rig, 4, 51), 0.1, 52);
   {
     std::vector<recon::CalibrationView> two(views.begin(), views.begin() + 2);
@@ -123,7 +123,7 @@ TEST(CalibrateOptions, RefusesTooFewViewsAndNoStereo) {
 }
 
 TEST(CalibrateOptions, YamlRoundTripKeepsSigmas) {
-  const auto& rig = test::paper_d3_rig();
+  const auto& rig = test::paper_d3();
   const auto views = test::noisy_views(rig, test::sample_poses(rig, 8, 61), 0.1, 62);
   const auto res = recon::calibrate_stereo(views, test::recon_board(), {});
   ASSERT_TRUE(res.ok) << res.message;
@@ -147,7 +147,7 @@ TEST(CalibrateOptions, YamlRoundTripKeepsSigmas) {
 }
 
 TEST(CalibrateCrossValidation, PaperSplitsAndOddEven) {
-  const auto& rig = test::paper_d3_rig();
+  const auto& rig = test::paper_d3();
   const auto views = test::noisy_views(rig, test::sample_poses(rig, 19, 71), 0.1, 72);
   const auto splits = recon::cross_validate_splits(views, test::recon_board(), {}, 3, 10);
   ASSERT_EQ(splits.splits.size(), 3u);

@@ -34,7 +34,7 @@ recon::StereoRig wrong_guess(const recon::StereoRig& truth) {
 }  // namespace
 
 TEST(CalibrateRendered, Dataset3WithinThreeSigma) {
-  const recon::StereoRig& truth = test::paper_d3_rig();
+  const recon::StereoRig& truth = test::paper_d3();
   const recon::StereoRig guess = wrong_guess(truth);
   sim::Renderer renderer(truth, sim::SceneSettings{}, sim::SensorSettings{});
   recon::CornerDetector left(guess.left), right(guess.right);

@@ -37,7 +37,7 @@ const Fixture& d3_calibration() {
   static const Fixture f = [] {
     Fixture f;
     f.views =
-        test::noisy_views(test::paper_d3_rig(), test::sample_poses(test::paper_d3_rig(), 16, 7), kNoisePx, 8);
+        test::noisy_views(test::paper_d3(), test::sample_poses(test::paper_d3(), 16, 7), kNoisePx, 8);
     f.result = recon::calibrate_stereo(f.views, test::recon_board(), {});
     return f;
   }();
@@ -48,7 +48,7 @@ const Fixture& d3_calibration() {
 
 TEST(CalibrateBundle, JacobianMatchesCentralDifferences) {
   const auto views =
-      test::noisy_views(test::paper_d3_rig(), test::sample_poses(test::paper_d3_rig(), 3, 3), 0.1, 4);
+      test::noisy_views(test::paper_d3(), test::sample_poses(test::paper_d3(), 3, 3), 0.1, 4);
   recon::CalibrationSettings s;
   s.tangential = true;  // every intrinsic column present
   const auto layout = recon::bundle::make_layout(s, 3);
@@ -82,7 +82,7 @@ TEST(CalibrateStereo, RecoversDataset3WithinThreeSigma) {
   const auto& f = d3_calibration();
   const auto& res = f.result;
   ASSERT_TRUE(res.ok) << res.message;
-  const auto truth = truth_values(test::paper_d3_rig());
+  const auto truth = truth_values(test::paper_d3());
   ASSERT_EQ(res.parameters.size(), truth.size());
   std::printf("%-10s %12s %12s %10s %8s\n", "parameter", "truth", "estimate", "sigma", "z");
   for (std::size_t i = 0; i < truth.size(); ++i) {

@@ -7,17 +7,12 @@
 #include <memory>
 #include <random>
 
+#include "../support/paper_rig.hpp"
 #include "naneye/recon/calibration_io.hpp"
 #include "naneye/recon/corners.hpp"
 #include "naneye/sim/render.hpp"
 
 namespace naneye::test {
-
-inline const recon::StereoRig& paper_d3() {
-  static const recon::StereoRig rig =
-      recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
-  return rig;
-}
 
 enum class Scene { board, no_board, small_board };
 
