@@ -28,29 +28,27 @@ using VecK = Eigen::Matrix<double, K, 1>;
 constexpr std::array<int, 11> kFull = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
 constexpr std::array<int, 11> kFixedEdges = {0, 1, 4, 5, 6, 7, 8, 9, 10, -1, -1};
 
-struct Model {
-  float qx, qy, c1, s1, c2, s2, k, inv_s, a, gx, gy, b, hx, hy;
-  explicit Model(const Vec& p)
-      : qx(float(p[0])),
-        qy(float(p[1])),
-        c1(float(std::cos(p[2]))),
-        s1(float(std::sin(p[2]))),
-        c2(float(std::cos(p[3]))),
-        s2(float(std::sin(p[3]))),
-        k(float(0.70710678118654752440 / p[4])),
-        inv_s(float(1.0 / p[4])),
-        a(float(p[5])),
-        gx(float(p[6])),
-        gy(float(p[7])),
-        b(float(p[8])),
-        hx(float(p[9])),
-        hy(float(p[10])) {}
-};
+// The model's parameters as the vector kernels take them (float, the normals as cosines and sines).
+simd::ModelParams model_params(const Vec& p) {
+  return {float(p[0]),
+          float(p[1]),
+          float(std::cos(p[2])),
+          float(std::sin(p[2])),
+          float(std::cos(p[3])),
+          float(std::sin(p[3])),
+          float(0.70710678118654752440 / p[4]),
+          float(1.0 / p[4]),
+          float(p[5]),
+          float(p[6]),
+          float(p[7]),
+          float(p[8]),
+          float(p[9]),
+          float(p[10])};
+}
 
 // The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2 (corners_simd.hpp).
-void shape(FastFitScratch& w, int n, const Model& m) {
-  const simd::ShapeParams sp{m.qx, m.qy, m.c1, m.s1, m.c2, m.s2, m.k};
-  (w.use_avx2 ? simd::shape_avx2 : simd::shape_sse)(sp, w.yx.data(), w.yy.data(), n, w.U1.data(), w.U2.data(),
+void shape(FastFitScratch& w, int n, const simd::ModelParams& m) {
+  (w.use_avx2 ? simd::shape_avx2 : simd::shape_sse)(m, w.yx.data(), w.yy.data(), n, w.U1.data(), w.U2.data(),
                                                     w.E1.data(), w.E2.data(), w.G1.data(), w.G2.data(),
                                                     w.S.data());
 }
@@ -91,10 +89,8 @@ template <int K>
 double evaluate(FastFitScratch& w, int n, const Vec& p, MatK<K>& JtJ, VecK<K>& Jtr,
                 bool shape_ready = false) {
   static_assert(K == 9 || K == 11);
-  const Model m(p);
+  const simd::ModelParams m = model_params(p);
   if (!shape_ready) shape(w, n, m);
-  const simd::ModelParams mp{m.qx,    m.qy, m.c1, m.s1, m.c2, m.s2, m.k,
-                             m.inv_s, m.a,  m.gx, m.gy, m.b,  m.hx, m.hy};
   const simd::WindowArrays in{w.yx.data(), w.yy.data(), w.dx.data(), w.dy.data(), w.val.data(),
                               w.wt.data(), w.U1.data(), w.U2.data(), w.E1.data(), w.E2.data(),
                               w.G1.data(), w.G2.data(), w.S.data()};
@@ -105,15 +101,15 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, MatK<K>& JtJ, VecK<K>& J
   }
   const int nv = (n + 7) & ~7;  // the window's tails hold zero weight (fit_saddle_fast)
   constexpr bool free_edges = K == 11;
-  const double cost = w.use_avx2 ? simd::residuals_jacobian_avx2<free_edges>(mp, in, nv, w.r.data(), J, Jw)
-                                 : simd::residuals_jacobian_sse<free_edges>(mp, in, nv, w.r.data(), J, Jw);
+  const double cost = w.use_avx2 ? simd::residuals_jacobian_avx2<free_edges>(m, in, nv, w.r.data(), J, Jw)
+                                 : simd::residuals_jacobian_sse<free_edges>(m, in, nv, w.r.data(), J, Jw);
   normal_equations<K>(w, n, w.r.data(), JtJ, Jtr);
   return cost;
 }
 
 // The six shading terms are linear for a fixed geometry: initialise them by linear least squares.
 void init_linear(FastFitScratch& w, int n, Vec& p) {
-  shape(w, n, Model(p));
+  shape(w, n, model_params(p));
   const auto dx = w.dx.head(n), dy = w.dy.head(n);
   const auto S = w.S.head(n);
   w.J[0].head(n).setOnes();

@@ -9,12 +9,12 @@ bool avx2_available() {
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
 
-void shape_sse(const ShapeParams& m, const float* yx, const float* yy, int n, float* U1, float* U2, float* E1,
+void shape_sse(const ModelParams& m, const float* yx, const float* yy, int n, float* U1, float* U2, float* E1,
                float* E2, float* G1, float* G2, float* S) {
   shape<V4>(m, yx, yy, n, U1, U2, E1, E2, G1, G2, S);
 }
 
-__attribute__((target("avx2,fma"))) void shape_avx2(const ShapeParams& m, const float* yx, const float* yy,
+__attribute__((target("avx2,fma"))) void shape_avx2(const ModelParams& m, const float* yx, const float* yy,
                                                     int n, float* U1, float* U2, float* E1, float* E2,
                                                     float* G1, float* G2, float* S) {
   shape<V8>(m, yx, yy, n, U1, U2, E1, E2, G1, G2, S);

@@ -97,14 +97,15 @@ NANEYE_SIMD_INLINE void erf_gauss(V z, V& e, V& g) {
   e = z < 0.0f ? -y : y;
 }
 
-struct ShapeParams {
-  float qx, qy, c1, s1, c2, s2, k;  // corner, edge normals, 1 / (sqrt2 blur)
+// The model at the window's pixels (corners_fast_fit.hpp), its parameters in float.
+struct ModelParams {
+  float qx, qy, c1, s1, c2, s2, k, inv_s, a, gx, gy, b, hx, hy;
 };
 
 // u1, u2, both erf and Gaussians and S = E1 E2 for the window's n pixels (rounded up to whole
 // vectors: the arrays hold kMaxPixels, a multiple of 8).
 template <class V>
-NANEYE_SIMD_INLINE void shape(const ShapeParams& m, const float* yx, const float* yy, int n, float* U1,
+NANEYE_SIMD_INLINE void shape(const ModelParams& m, const float* yx, const float* yy, int n, float* U1,
                               float* U2, float* E1, float* E2, float* G1, float* G2, float* S) {
   constexpr int L = kLanes<V>;
   for (int i = 0; i < n; i += L) {
@@ -123,10 +124,6 @@ NANEYE_SIMD_INLINE void shape(const ShapeParams& m, const float* yx, const float
   }
 }
 
-// The model at the window's pixels (corners_fast_fit.hpp), its parameters in float.
-struct ModelParams {
-  float qx, qy, c1, s1, c2, s2, k, inv_s, a, gx, gy, b, hx, hy;
-};
 // The window (inputs) and the geometry shape() computed at the same parameters.
 struct WindowArrays {
   const float *yx, *yy, *dx, *dy, *val, *wt, *U1, *U2, *E1, *E2, *G1, *G2, *S;
@@ -211,9 +208,9 @@ NANEYE_SIMD_INLINE void normal_equations(const std::array<const float*, K + 1>& 
 
 // Entry points (corners_simd.cpp): the same loops for 4 and 8 lanes.
 bool avx2_available();
-void shape_sse(const ShapeParams& m, const float* yx, const float* yy, int n, float* U1, float* U2, float* E1,
+void shape_sse(const ModelParams& m, const float* yx, const float* yy, int n, float* U1, float* U2, float* E1,
                float* E2, float* G1, float* G2, float* S);
-void shape_avx2(const ShapeParams& m, const float* yx, const float* yy, int n, float* U1, float* U2,
+void shape_avx2(const ModelParams& m, const float* yx, const float* yy, int n, float* U1, float* U2,
                 float* E1, float* E2, float* G1, float* G2, float* S);
 template <bool FreeEdges>
 double residuals_jacobian_sse(const ModelParams& m, const WindowArrays& in, int nv, float* r,

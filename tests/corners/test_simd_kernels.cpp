@@ -15,7 +15,7 @@
 namespace naneye::recon {
 namespace {
 
-using ShapeFn = void (*)(const simd::ShapeParams&, const float*, const float*, int, float*, float*, float*,
+using ShapeFn = void (*)(const simd::ModelParams&, const float*, const float*, int, float*, float*, float*,
                          float*, float*, float*, float*);
 
 std::vector<ShapeFn> shape_kernels() {
@@ -34,8 +34,8 @@ TEST(SimdKernels, ErfAndGaussianMatchTheCLibrary) {
     for (int block = 0; block < 30; ++block) {
       for (int i = 0; i < n; ++i)
         yx[static_cast<std::size_t>(i)] = -9.5f + 0.00172f * static_cast<float>(block * n + i);
-      shape(simd::ShapeParams{0, 0, 1, 0, 0, 1, 1}, yx.data(), yy.data(), n, U1.data(), U2.data(), E1.data(),
-            E2.data(), G1.data(), G2.data(), S.data());
+      shape(simd::ModelParams{0, 0, 1, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0, 0}, yx.data(), yy.data(), n, U1.data(),
+            U2.data(), E1.data(), E2.data(), G1.data(), G2.data(), S.data());
       for (std::size_t i = 0; i < n; ++i) {
         const double z = yx[i];
         worst_erf = std::max(worst_erf, std::abs(E1[i] - std::erf(z)));
