@@ -36,8 +36,7 @@ struct Fixture {
 const Fixture& d3_calibration() {
   static const Fixture f = [] {
     Fixture f;
-    f.views =
-        test::noisy_views(test::paper_d3(), test::sample_poses(test::paper_d3(), 16, 7), kNoisePx, 8);
+    f.views = test::noisy_views(test::paper_d3(), test::sample_poses(test::paper_d3(), 16, 7), kNoisePx, 8);
     f.result = recon::calibrate_stereo(f.views, test::recon_board(), {});
     return f;
   }();
@@ -47,8 +46,7 @@ const Fixture& d3_calibration() {
 }  // namespace
 
 TEST(CalibrateBundle, JacobianMatchesCentralDifferences) {
-  const auto views =
-      test::noisy_views(test::paper_d3(), test::sample_poses(test::paper_d3(), 3, 3), 0.1, 4);
+  const auto views = test::noisy_views(test::paper_d3(), test::sample_poses(test::paper_d3(), 3, 3), 0.1, 4);
   recon::CalibrationSettings s;
   s.tangential = true;  // every intrinsic column present
   const auto layout = recon::bundle::make_layout(s, 3);
