@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace naneye::daemon::http {
 
@@ -18,6 +19,14 @@ void set_body(httplib::Response& res, std::string body, const char* content_type
 // Every error body: {"error": code, "detail": human text}.
 void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail);
 void send_json(httplib::Response& res, const nlohmann::json& body, int status = 200);
+// The answer of last resort when even building an error body threw: a fixed 500 that cannot fail.
+void send_fallback_error(httplib::Response& res) noexcept;
+
+// True when `s` is well-formed UTF-8 (RFC 3629).
+bool valid_utf8(std::string_view s);
+// Answers 400 "bad_encoding" and returns true when the (percent-decoded) path, a query parameter or
+// a header is not UTF-8: such bytes must never reach a JSON body.
+bool reject_bad_encoding(const httplib::Request& req, httplib::Response& res);
 
 // Refuses (400) any query parameter not in `allowed`; true when the request may go on.
 bool only_params(const httplib::Request& req, httplib::Response& res,

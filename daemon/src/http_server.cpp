@@ -30,11 +30,21 @@ void set_body(httplib::Response& res, std::string body, const char* content_type
 
 void send_json(httplib::Response& res, const nlohmann::json& body, int status) {
   res.status = status;
-  set_body(res, body.dump(), "application/json");
+  // Client bytes are checked before any handler runs (reject_bad_encoding); `replace` is the last
+  // line: nlohmann's default throws on invalid UTF-8, and an exception thrown from httplib's error
+  // handler is not caught by httplib: it terminated the daemon on a request for "/%ff".
+  set_body(res, body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), "application/json");
 }
 
 void send_error(httplib::Response& res, int status, const std::string& error, const std::string& detail) {
   send_json(res, {{"error", error}, {"detail", detail}}, status);
+}
+
+void send_fallback_error(httplib::Response& res) noexcept {
+  // No allocation can be trusted here (the failure may be bad_alloc): a literal body, no provider.
+  res.status = 500;
+  res.body.assign(R"({"error":"internal_error","detail":"the error could not be reported"})");
+  res.set_header("Content-Type", "application/json");
 }
 
 bool only_params(const httplib::Request& req, httplib::Response& res,
@@ -91,6 +101,49 @@ bool double_param(const httplib::Request& req, httplib::Response& res, const cha
     return false;
   }
   out = x;
+  return true;
+}
+
+bool valid_utf8(std::string_view s) {
+  // RFC 3629, section 4: no overlong forms, no surrogates, nothing above U+10FFFF.
+  const auto* p = reinterpret_cast<const unsigned char*>(s.data());
+  const auto* end = p + s.size();
+  while (p < end) {
+    const unsigned c = *p++;
+    if (c < 0x80) continue;
+    int more = 0;
+    unsigned lo = 0x80, hi = 0xBF;  // the allowed range of the first continuation byte
+    if (c >= 0xC2 && c <= 0xDF) {
+      more = 1;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      more = 2;
+      if (c == 0xE0) lo = 0xA0;
+      if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      more = 3;
+      if (c == 0xF0) lo = 0x90;
+      if (c == 0xF4) hi = 0x8F;
+    } else {
+      return false;
+    }
+    if (end - p < more) return false;
+    if (*p < lo || *p > hi) return false;
+    for (int k = 1; k < more; ++k)
+      if ((p[k] & 0xC0) != 0x80) return false;
+    p += more;
+  }
+  return true;
+}
+
+bool reject_bad_encoding(const httplib::Request& req, httplib::Response& res) {
+  const char* where = nullptr;
+  if (!valid_utf8(req.path)) where = "the path";
+  for (const auto& [key, value] : req.params)
+    if (!where && (!valid_utf8(key) || !valid_utf8(value))) where = "a query parameter";
+  for (const auto& [key, value] : req.headers)
+    if (!where && (!valid_utf8(key) || !valid_utf8(value))) where = "a header";
+  if (!where) return false;
+  send_error(res, 400, "bad_encoding", std::string(where) + " is not valid UTF-8 (after percent-decoding)");
   return true;
 }
 
@@ -189,34 +242,46 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   server_->set_read_timeout(5, 0);
   server_->set_write_timeout(2, 0);
   // Counted before the handler runs, so that a client that got its answer also sees it counted.
-  server_->set_pre_routing_handler([ctx = ctx_.get()](const httplib::Request&, httplib::Response&) {
+  server_->set_pre_routing_handler([ctx = ctx_.get()](const httplib::Request& req, httplib::Response& res) {
     ctx->requests.fetch_add(1, std::memory_order_relaxed);
-    return httplib::Server::HandlerResponse::Unhandled;
+    return http::reject_bad_encoding(req, res) ? httplib::Server::HandlerResponse::Handled
+                                               : httplib::Server::HandlerResponse::Unhandled;
   });
   http::add_status_routes(*server_, *ctx_);
   http::add_depth_routes(*server_, *ctx_);
   http::add_frame_routes(*server_, *ctx_);
   http::add_event_routes(*server_, *ctx_);
   // Unmatched paths (and httplib's own errors) get the JSON error body too.
-  server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+  // httplib calls the error handler outside its own try block (an exception there terminates the
+  // process), and the exception handler inside a catch block: neither may throw.
+  server_->set_error_handler([](const httplib::Request& req, httplib::Response& res) noexcept {
     if (res.has_header("Content-Type")) return;  // a handler's own error body
-    if (res.status == 404) {
-      http::send_error(res, 404, "not_found", "no resource at " + req.path + " (see docs/http-api.md)");
-    } else {
-      http::send_error(res, res.status, "http_error", "HTTP status " + std::to_string(res.status));
-    }
-  });
-  server_->set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
-    std::string what = "unknown";
     try {
-      if (ep) std::rethrow_exception(ep);
-    } catch (const std::exception& e) {
-      what = e.what();
+      if (res.status == 404) {
+        http::send_error(res, 404, "not_found", "no resource at " + req.path + " (see docs/http-api.md)");
+      } else {
+        http::send_error(res, res.status, "http_error", "HTTP status " + std::to_string(res.status));
+      }
     } catch (...) {
+      http::send_fallback_error(res);
     }
-    spdlog::get("daemon") ? spdlog::get("daemon")->error("handler failed: {}", what) : void();
-    http::send_error(res, 500, "internal_error", what);
   });
+  server_->set_exception_handler(
+      [](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) noexcept {
+        try {
+          std::string what = "unknown";
+          try {
+            if (ep) std::rethrow_exception(ep);
+          } catch (const std::exception& e) {
+            what = e.what();
+          } catch (...) {
+          }
+          if (auto log = spdlog::get("daemon")) log->error("handler for {} failed: {}", req.path, what);
+          http::send_error(res, 500, "internal_error", what);
+        } catch (...) {
+          http::send_fallback_error(res);
+        }
+      });
 }
 
 HttpServer::~HttpServer() {

@@ -175,3 +175,34 @@ TEST_F(NaneyedTest, BodiesAreNeverCompressedEvenWhenTheClientAcceptsIt) {
   const auto d = nlohmann::json::parse(conn.get("/v1/depth", "Accept-Encoding: br\r\n")->body);
   EXPECT_EQ(d["pair"], 11);
 }
+
+TEST_F(NaneyedTest, InvalidUtf8FromAClientGets400AndTheDaemonLives) {
+  // "/%ff" used to terminate naneyed: its 404 body put the decoded path into JSON, nlohmann threw on
+  // the invalid UTF-8, and httplib's error handler runs outside its try block.
+  const auto file = capture(12);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n");
+  wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
+  RawConnection conn(port);
+  ASSERT_TRUE(conn.connected());
+  struct Case {
+    const char* path;
+    const char* header;
+  };
+  for (const Case c :
+       {Case{"/%ff", ""}, Case{"/v1/nothing%fe%ff", ""}, Case{"/v1/depth?max_age_ms=%ff", ""},
+        Case{"/v1/depth?%ff=1", ""}, Case{"/%c0%af", ""} /* overlong "/" */,
+        Case{"/%ed%a0%80", ""} /* a UTF-16 surrogate */, Case{"/%f4%90%80%80", ""} /* > U+10FFFF */,
+        Case{"/v1/status", "X-Probe: \xff\xfe\r\n"}}) {
+    const auto r = conn.get(c.path, c.header);
+    ASSERT_TRUE(r) << c.path << ": the connection died (daemon gone?)\n" << daemon->log();
+    EXPECT_EQ(r->status, 400) << c.path << " " << r->body;
+    EXPECT_EQ(nlohmann::json::parse(r->body)["error"], "bad_encoding") << c.path;
+  }
+  // Well-formed UTF-8 is still an ordinary path: 404 naming it.
+  const auto ok = conn.get("/caf%C3%A9");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 404);
+  EXPECT_NE(nlohmann::json::parse(ok->body)["detail"].get<std::string>().find("/caf\xC3\xA9"),
+            std::string::npos);
+  EXPECT_EQ(get_json("/v1/status")["state"].is_string(), true);
+}
