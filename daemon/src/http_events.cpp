@@ -41,9 +41,12 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
     }
     auto stream = std::make_shared<Stream>();
     stream->ctx = &ctx;
-    // Without a resume point, start with the latest result so the client has one at once.
-    stream->cursor =
-        last ? static_cast<std::uint64_t>(*last) + 1 : ctx.pipeline->results().latest_seq().value_or(1);
+    // Without a resume point, start with the latest result so the client has one at once. A resume
+    // point beyond the latest result comes from an earlier run of the daemon (ids restart at 1): an
+    // EventSource reconnecting to a restarted naneyed would otherwise wait until this run caught up.
+    const auto latest = ctx.pipeline->results().latest_seq();
+    const bool from_this_run = last && static_cast<std::uint64_t>(*last) <= latest.value_or(0);
+    stream->cursor = from_this_run ? static_cast<std::uint64_t>(*last) + 1 : latest.value_or(1);
     res.set_header("Cache-Control", "no-cache");
     res.set_header("X-Accel-Buffering", "no");
     res.set_chunked_content_provider(

@@ -206,3 +206,30 @@ TEST_F(NaneyedTest, InvalidUtf8FromAClientGets400AndTheDaemonLives) {
             std::string::npos);
   EXPECT_EQ(get_json("/v1/status")["state"].is_string(), true);
 }
+
+TEST_F(NaneyedTest, AResumePointFromAnEarlierRunStartsAtTheLatestResult) {
+  // An EventSource that reconnects to a restarted naneyed sends the last id of the previous run;
+  // ids restart at 1, so it used to wait (silently) until this run caught up with it.
+  const int n = 12;
+  const auto file = capture(n);
+  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
+  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  for (const std::string how : {"query", "header"}) {
+    std::string buffer, first_id;
+    httplib::Headers headers;
+    std::string path = "/v1/events";
+    if (how == "query")
+      path += "?last_event_id=100000";
+    else
+      headers.emplace("Last-Event-ID", "100000");
+    client->Get(path.c_str(), headers, [&](const char* d, std::size_t len) {
+      buffer.append(d, len);
+      const auto at = buffer.find("id: ");
+      const auto end = buffer.find('\n', at);
+      if (at == std::string::npos || end == std::string::npos) return true;
+      first_id = buffer.substr(at + 4, end - at - 4);
+      return false;
+    });
+    EXPECT_EQ(first_id, std::to_string(n)) << how << ": " << buffer.substr(0, 200);
+  }
+}
