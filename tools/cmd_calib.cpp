@@ -1,4 +1,6 @@
 // `naneye calib info FILE... [--json]`: what a calibration says, and how far it can be trusted.
+// `naneye calib export FILE... --format ros|opencv|mrcal --out DIR`: the same calibration for the
+// tools users already have (calib_export.hpp).
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -6,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "calib_export.hpp"
 #include "commands.hpp"
 #include "naneye/recon/calibration_io.hpp"
 #include "naneye/recon/domain_report.hpp"
@@ -80,6 +83,29 @@ void add_calib_commands(CLI::App& app) {
       std::cout << j.dump(2) << "\n";
     else
       print_text(j);
+  });
+
+  auto* exp = calib->add_subcommand(
+      "export", "Write a calibration as ROS camera_info, OpenCV stereo YAML or mrcal models");
+  auto ex_files = std::make_shared<std::vector<std::string>>();
+  auto format = std::make_shared<std::string>();
+  auto out_dir = std::make_shared<std::string>();
+  exp->add_option("files", *ex_files, "Calibration YAML (one file, or intrinsics and extrinsics)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  exp->add_option("--format", *format,
+                  "ros (left.yaml, right.yaml), opencv (stereo.yml) or mrcal (*.cameramodel)")
+      ->required()
+      ->check(CLI::IsMember({"ros", "opencv", "mrcal"}));
+  exp->add_option("--out", *out_dir, "Folder to write into (created if missing)")->required();
+  exp->callback([ex_files, format, out_dir] {
+    const recon::StereoRig rig =
+        recon::load_rig(std::vector<std::filesystem::path>(ex_files->begin(), ex_files->end()));
+    std::filesystem::create_directories(*out_dir);
+    const auto written = *format == "ros"      ? export_ros(rig, *out_dir)
+                         : *format == "opencv" ? export_opencv(rig, *out_dir)
+                                               : export_mrcal(rig, *out_dir);
+    for (const auto& p : written) std::cout << p.string() << "\n";
   });
 }
 
