@@ -1,5 +1,5 @@
 // /v1/frames/left.png and right.png: the latest frames, 10-bit -> 8-bit, optionally with the
-// detected corners drawn.
+// detected corners drawn; /v1/domain/left.png and right.png: where each camera's model is valid.
 #include <opencv2/imgproc.hpp>
 
 #include "http_internal.hpp"
@@ -50,11 +50,31 @@ void frame_route(httplib::Server& svr, HttpContext& ctx, const char* path, bool 
   });
 }
 
+// The camera's valid domain as an 8-bit mask on its raw grid: 255 where the pixel centre undistorts
+// (CameraModel::undistort succeeds), 0 beyond the fold, where nothing is measured. Computed per
+// request (62 500 Newton solves, a few ms): it is asked for once per calibration, not per frame.
+void domain_route(httplib::Server& svr, HttpContext& ctx, const char* path, bool left) {
+  svr.Get(path, [&ctx, left](const httplib::Request& req, httplib::Response& res) {
+    if (!only_params(req, res, {})) return;
+    const auto rig = ctx.pipeline->rig();
+    const auto& cam = left ? rig->left : rig->right;
+    cv::Mat mask(cam.height(), cam.width(), CV_8UC1);
+    for (int v = 0; v < mask.rows; ++v)
+      for (int u = 0; u < mask.cols; ++u)
+        mask.at<std::uint8_t>(v, u) = cam.in_domain(Eigen::Vector2d(u, v)) ? 255 : 0;
+    std::vector<std::uint8_t> png;
+    if (!encode_png(mask, png)) return send_error(res, 500, "encode_failed", "PNG encoding failed");
+    res.set_content(std::string(png.begin(), png.end()), "image/png");
+  });
+}
+
 }  // namespace
 
 void add_frame_routes(httplib::Server& svr, HttpContext& ctx) {
   frame_route(svr, ctx, "/v1/frames/left.png", true);
   frame_route(svr, ctx, "/v1/frames/right.png", false);
+  domain_route(svr, ctx, "/v1/domain/left.png", true);
+  domain_route(svr, ctx, "/v1/domain/right.png", false);
 }
 
 }  // namespace naneye::daemon::http

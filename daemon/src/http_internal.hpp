@@ -50,5 +50,6 @@ void add_status_routes(httplib::Server& svr, HttpContext& ctx);  // status, heal
 void add_depth_routes(httplib::Server& svr, HttpContext& ctx);   // depth, depth/at, points, points.ply
 void add_frame_routes(httplib::Server& svr, HttpContext& ctx);   // frames/left.png, right.png
 void add_event_routes(httplib::Server& svr, HttpContext& ctx);   // events (SSE)
+void add_web_routes(httplib::Server& svr);                       // the viewer: /, /web/*
 
 }  // namespace naneye::daemon::http

@@ -251,6 +251,7 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   http::add_depth_routes(*server_, *ctx_);
   http::add_frame_routes(*server_, *ctx_);
   http::add_event_routes(*server_, *ctx_);
+  http::add_web_routes(*server_);
   // Unmatched paths (and httplib's own errors) get the JSON error body too.
   // httplib calls the error handler outside its own try block (an exception there terminates the
   // process), and the exception handler inside a catch block: neither may throw.

@@ -1,0 +1,152 @@
+// The viewer in a real browser: Debian's chromium, headless, driven over the DevTools protocol by
+// puppeteer-core, against a real naneyed replaying the bundled capture. Run by ctest (viewer_browser):
+//   node tests/browser/viewer.test.mjs --naneyed build/daemon/naneyed [--screenshots DIR]
+// Prints one line per check and "N passed, N failed" at the end; exits non-zero on any failure.
+import { spawn } from "node:child_process";
+import { mkdtempSync, writeFileSync, mkdirSync } from "node:fs";
+import { createServer } from "node:net";
+import { tmpdir } from "node:os";
+import { join, resolve, dirname } from "node:path";
+import { fileURLToPath } from "node:url";
+import puppeteer from "puppeteer-core";
+
+const here = dirname(fileURLToPath(import.meta.url));
+const root = resolve(here, "../..");
+const arg = (name, fallback) => {
+  const i = process.argv.indexOf(name);
+  return i > 0 ? process.argv[i + 1] : fallback;
+};
+const naneyed = resolve(arg("--naneyed", join(root, "build/daemon/naneyed")));
+const capture = resolve(arg("--capture", join(root, "tests/data/sim-d3-mono/capture.raw")));
+const chromium = arg("--chromium", "/usr/bin/chromium");
+const screenshots = arg("--screenshots", null);
+
+let passed = 0, failed = 0;
+function check(name, ok, detail = "") {
+  if (ok) ++passed; else ++failed;
+  console.log(`${ok ? "PASS" : "FAIL"} ${name}${detail ? ": " + detail : ""}`);
+}
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+async function until(what, fn, timeoutMs) {
+  const end = Date.now() + timeoutMs;
+  for (;;) {
+    const v = await fn();
+    if (v) return v;
+    if (Date.now() > end) return null;
+    await sleep(100);
+  }
+}
+
+function freePort() {
+  return new Promise((res, rej) => {
+    const s = createServer();
+    s.listen(0, "127.0.0.1", () => { const p = s.address().port; s.close(() => res(p)); });
+    s.on("error", rej);
+  });
+}
+
+const dir = mkdtempSync(join(tmpdir(), "naneye-viewer-"));
+const port = await freePort();
+const origin = `http://127.0.0.1:${port}`;
+const config = join(dir, "naneyed.toml");
+writeFileSync(config, `[source]\nuri = "file://${capture}?speed=realtime&loop=1"\n` +
+  `[calibration]\npath = "${join(root, "config/calib/paper-d3.yaml")}"\n` +
+  `[http]\nhost = "127.0.0.1"\nport = ${port}\n`);
+
+let daemon = null;
+function startDaemon() {
+  daemon = spawn(naneyed, ["--config", config], { stdio: ["ignore", "ignore", "pipe"] });
+  daemon.stderr.on("data", () => {});
+  return until("daemon up", async () => {
+    try { return (await fetch(`${origin}/v1/status`)).ok; } catch { return false; }
+  }, 15000);
+}
+async function stopDaemon() {
+  const exited = new Promise((r) => daemon.once("exit", r));
+  daemon.kill("SIGTERM");
+  await exited;
+}
+const status = async () => (await fetch(`${origin}/v1/status`)).json();
+
+let browser = null;
+try {
+  check("naneyed serves on the bundled capture", await startDaemon());
+  const index = await fetch(`${origin}/`);
+  const html = await index.text();
+  check("GET / is the viewer page", index.ok && index.headers.get("content-type").startsWith("text/html") && html.includes("viewer.js"));
+  let bytes = html.length;
+  for (const f of ["viewer.js", "cloud.js", "plot.js", "colormap.js", "viewer.css"]) bytes += (await (await fetch(`${origin}/web/${f}`)).text()).length;
+  check("the page and its assets weigh under 300 kB", bytes < 300_000, `${bytes} bytes`);
+
+  browser = await puppeteer.launch({
+    executablePath: chromium,
+    headless: true,
+    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+      "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage"],
+  });
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1280, height: 1000 });
+  const errors = [], foreign = [];
+  page.on("console", (m) => { if (m.type() === "error") errors.push(m.text()); });
+  page.on("pageerror", (e) => errors.push(String(e)));
+  page.on("request", (r) => {
+    const u = r.url();
+    if (!u.startsWith(origin + "/") && !u.startsWith("blob:") && !u.startsWith("data:")) foreign.push(u);
+  });
+  await page.goto(`${origin}/`, { waitUntil: "domcontentloaded" });
+
+  const pair = () => page.$eval("#pair", (e) => e.textContent);
+  const p0 = await until("pair shown", async () => { const p = await pair(); return /^\d+$/.test(p) ? p : null; }, 10000);
+  check("the pair number appears", p0 !== null, `pair ${p0}`);
+  const p1 = await until("pair changes", async () => { const p = await pair(); return p !== p0 ? p : null; }, 5000);
+  check("the pair number changes over time", p1 !== null, `${p0} -> ${p1}`);
+
+  const framePair = () => page.evaluate(() => window.naneyeViewer.view.framesPair);
+  const f0 = await until("frames", async () => (await framePair()) ?? null, 5000);
+  const f1 = await until("frames change", async () => { const f = await framePair(); return f !== f0 ? f : null; }, 5000);
+  const imgOk = await page.$eval("#img-left", (e) => e.complete && e.naturalWidth === 250);
+  check("both frames load and change", f0 !== null && f1 !== null && imgOk, `frames of pair ${f0} then ${f1}`);
+
+  const drawn = await until("cloud", async () => { const n = await page.evaluate(() => window.naneyeViewer.cloud.drawn); return n > 0 ? n : null; }, 15000);
+  check("the 3D view draws points", drawn !== null, `${drawn} points`);
+
+  // The health panel against /v1/status read at the same moment: fps within 1 (both are estimates
+  // over the same clock, read a poll apart), the dropped counter exactly.
+  await sleep(1500);
+  const s = await status();
+  const panelFps = await page.$eval("#h-fps", (e) => e.textContent.split("/").map(Number));
+  const panelDropped = await page.$eval("#c-pairs_dropped", (e) => Number(e.textContent));
+  check("the health panel shows the status fps", Math.abs(panelFps[0] - s.fps.left) < 1 && Math.abs(panelFps[1] - s.fps.right) < 1,
+    `panel ${panelFps.join(" / ")}, status ${s.fps.left.toFixed(1)} / ${s.fps.right.toFixed(1)}`);
+  check("the health panel shows the driver counters", panelDropped === s.counters.pairs_dropped &&
+    (await page.$$("#counters tr")).length === Object.keys(s.counters).length, `pairs_dropped ${panelDropped}`);
+  const source = await page.$eval("#h-source", (e) => e.textContent);
+  check("the health panel shows the source", source.includes(s.source.kind) && source.includes("capture.raw"), source);
+  const folded = await page.evaluate(() => { const c = document.getElementById("ov-left"); const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data; let n = 0; for (let i = 3; i < d.length; i += 4) n += d[i] > 0; return n / (d.length / 4); });
+  check("pixels beyond the left camera's fold are shaded", folded > 0.05 && folded < 0.5, `${(100 * folded).toFixed(1)} % of the overlay`);
+
+  if (screenshots) {
+    mkdirSync(screenshots, { recursive: true });
+    await page.screenshot({ path: join(screenshots, "viewer-board.png"), fullPage: true });
+  }
+  check("no console errors while streaming", errors.length === 0, errors.join(" | "));
+  check("no request leaves the daemon", foreign.length === 0, foreign.join(" "));
+
+  await stopDaemon();
+  const down = await until("stopped shown", async () => (await page.$eval("#state", (e) => e.dataset.state)) === "unreachable", 6000);
+  const bannerText = await page.$eval("#banner", (e) => (e.hidden ? "" : e.textContent));
+  check("a stopped daemon is said on the page", down && bannerText.includes("not answering"), bannerText);
+
+  check("naneyed restarts on the same port", await startDaemon());
+  const back = await until("recovered", async () => (await page.$eval("#state", (e) => e.dataset.state)) === "streaming", 15000);
+  const p2 = await pair();
+  const p3 = await until("pairs again", async () => { const p = await pair(); return p !== p2 ? p : null; }, 8000);
+  check("the page recovers by itself", back && p3 !== null, `state streaming, pair ${p2} -> ${p3}`);
+} catch (e) {
+  check("the browser test ran to its end", false, e.stack || String(e));
+} finally {
+  if (browser) await browser.close();
+  if (daemon && daemon.exitCode === null) daemon.kill("SIGKILL");
+}
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);
