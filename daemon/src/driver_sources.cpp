@@ -1,3 +1,5 @@
+#include <spdlog/spdlog.h>
+
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/driver/device_list.hpp"
 #include "naneye/driver/source_registry.hpp"
@@ -23,7 +25,12 @@ std::vector<std::string> attached_boards() {
   std::vector<driver::UsbProfile> profiles;
   try {
     profiles = driver::load_usb_profiles(driver::default_profile_dir());
-  } catch (const std::exception&) {
+  } catch (const std::exception& e) {
+    // An unreadable profile folder must not stop the fallback to the built-in boards, but an
+    // operator whose own profile is ignored must be told why.
+    if (auto log = spdlog::get("daemon"))
+      log->warn("device profiles in {} not read ({}); using the built-in ones",
+                driver::default_profile_dir().string(), e.what());
   }
   if (profiles.empty()) profiles = driver::builtin_usb_profiles();
   std::vector<std::string> uris;
