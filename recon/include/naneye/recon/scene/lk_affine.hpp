@@ -1,0 +1,51 @@
+#pragma once
+// Sub-pixel refinement of a match on the raw pixels: inverse-compositional Lucas-Kanade with an
+// affine warp (Baker & Matthews, "Lucas-Kanade 20 years on", IJCV 56(3), 2004, Sec. 3.2), the
+// template being the source window at a pixel centre, each warped target window normalised to the
+// template's mean and contrast (the eyes' exposure and vignetting differ), and the translation's
+// covariance from the Gauss-Newton Hessian and the residual noise: Sigma = s^2 H^-1, s^2 = SSR / (N - 8)
+// (6 warp parameters, 2 for the normalisation).
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+#include "naneye/recon/scene/features.hpp"
+
+namespace naneye::recon::scene {
+
+struct LkSettings {
+  int radius = 4;  // px; template window (2 radius + 1)^2
+  int max_iterations = 20;
+  double stop_step_px = 1e-3;  // px; stop when the centre moves less than this
+  double max_travel_px = 2.5;  // px; from the start: beyond, the coarse match was wrong
+  // The images' noise is white noise filtered by this 3x3 kernel (row-major; sums of squares need
+  // not be 1): the identity for a mono sensor, raw_to_luminance's binomial for a Bayer one, whose
+  // neighbouring luminance pixels share raw noise. The covariance is then the sandwich
+  // H^-1 (sum_j (b * SD)_j (b * SD)_j^T) H^-1 s^2 / |b|^2 instead of s^2 H^-1.
+  std::array<float, 9> noise_kernel{0, 0, 0, 0, 1, 0, 0, 0, 0};
+  static std::array<float, 9> binomial3() {
+    return {1 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 4 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 1 / 16.f};
+  }
+};
+
+struct LkResult {
+  bool converged = false;
+  Eigen::Vector2d px{0, 0};                         // target raw pixel of the template centre
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();  // the warp's linear part
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();    // px^2, covariance of px
+  double zncc = 0;                                  // of the final warped window
+  int iterations = 0;
+};
+
+// `tgx`, `tgy`: central-difference gradients of `src`. `dst_usable`: non-zero where a window of
+// radius + 1 around the pixel lies inside the target's domain; the warp must keep its centre there.
+// The warp is affine in q: without `shape`, q = the template offset (dc, dr) and the start is
+// A0 q + start; with `shape` (one entry per template pixel, row-major), q = the pixel's predicted
+// place in the target relative to the centre (the exact model's map at the coarse depth, which an
+// affine in raw pixels cannot follow near the image edges), the start is q + start and A0 is that
+// map's Jacobian at the centre.
+LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, int u, int v,
+                       const GrayView& dst, const std::uint8_t* dst_usable, const Eigen::Vector2d& start,
+                       const Eigen::Matrix2d& A0, const Eigen::Vector2d* shape, const LkSettings& s);
+
+}  // namespace naneye::recon::scene

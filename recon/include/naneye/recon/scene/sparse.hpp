@@ -1,0 +1,104 @@
+#pragma once
+// Sparse scene reconstruction (issue 14, docs/scene.md): Shi-Tomasi features spread over the left
+// raw frame, matched along the exact model's epipolar curve in the right raw frame (ZNCC), refined
+// on the raw pixels by affine inverse-compositional LK, checked right-to-left, triangulated with
+// niter2 + reprojection refinement (triangulation.hpp), each with the depth sigma its own match
+// precision gives. A feature whose match leaves a model's domain is flagged, never triangulated.
+#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "naneye/recon/corners.hpp"
+#include "naneye/recon/rig.hpp"
+#include "naneye/recon/scene/epipolar_match.hpp"
+#include "naneye/recon/scene/features.hpp"
+#include "naneye/recon/scene/lk_affine.hpp"
+
+namespace naneye::recon::scene {
+
+struct SparseSettings {
+  FeatureSettings features;
+  LkSettings lk;
+  double z_min_mm = 5, z_max_mm = 150;  // mm; the depths searched (the issue's scenes: 8-80 mm)
+  double search_step_px = 1.0;          // px; curve sampling of the coarse search
+  int search_radius = 3;                // px; coarse ZNCC window (7 x 7)
+  double min_zncc = 0.7;                // coarse best below: no match
+  // Ambiguity: the best must leave (1 - best) <= this share of (1 - second best) (a texture that
+  // repeats along the curve gives two near-equal peaks: refused instead of guessed).
+  double max_ambiguity = 0.5;
+  double min_final_zncc = 0.9;   // after LK
+  double lr_tolerance_px = 1.0;  // px; right-to-left search must land this close to the feature
+  int max_features = 1536;
+};
+
+enum class PointStatus {
+  ok,
+  no_candidates,        // the epipolar curve has no usable window in the right image
+  weak_match,           // best ZNCC below min_zncc (texture-less, or not seen by the right eye)
+  ambiguous,            // two near-equal peaks along the curve
+  refinement_failed,    // LK diverged, left the image or the right domain
+  left_right_mismatch,  // the right-to-left search lands elsewhere
+  triangulation_failed,
+};
+
+const char* to_string(PointStatus s);
+
+struct ScenePoint {
+  int id = 0;
+  Eigen::Vector2d left_px{0, 0}, right_px{0, 0};  // raw pixels (right: NaN unless matched)
+  Eigen::Vector3d X = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());  // left frame, mm
+  double depth_sigma_mm = std::numeric_limits<double>::quiet_NaN();
+  double zncc = 0;
+  PointStatus status = PointStatus::no_candidates;
+  bool valid() const { return status == PointStatus::ok; }
+};
+
+struct SparseResult {
+  std::vector<ScenePoint> points;  // every feature tried, valid or not (reserved: max_features)
+  double noise_sigma_dn = 0;       // the left image's measured noise
+  int valid_count = 0;
+};
+
+// The luminance of both eyes and their usable masks; shared with the dense path.
+struct StereoLuma {
+  std::vector<float> left, right, scratch;
+  int width = 0, height = 0;
+  bool bayer = false;  // filtered from a GRBG mosaic: neighbouring pixels share noise
+  GrayView left_view() const { return {left.data(), width, height}; }
+  GrayView right_view() const { return {right.data(), width, height}; }
+};
+
+class SparseReconstructor {
+ public:
+  explicit SparseReconstructor(const StereoRig& rig, const SparseSettings& s = {});
+  // One pair; `out` keeps its capacity from pair to pair (allocation-free once warm).
+  void reconstruct(const RawImageView& left, const RawImageView& right, SparseResult& out);
+  // The same on luminance already computed (by load_luma).
+  void reconstruct(const StereoLuma& luma, SparseResult& out);
+  void load_luma(const RawImageView& left, const RawImageView& right);
+  const StereoLuma& luma() const { return luma_; }
+  const StereoRig& rig() const { return rig_; }
+  const SparseSettings& settings() const { return s_; }
+  // Non-zero where a window of `radius` around the pixel lies inside the camera's model domain and
+  // the active image (column 249 and the edge rows excluded). eye 0 = left.
+  const std::vector<std::uint8_t>& usable(int eye) const { return usable_[eye]; }
+
+ private:
+  void match(const StereoLuma& luma, const Feature& f, ScenePoint& p);
+
+  StereoRig rig_;
+  SparseSettings s_;
+  Eigen::Matrix3d R_lr_, R_rl_;
+  Eigen::Vector3d T_lr_, T_rl_;
+  std::vector<std::uint8_t> usable_[2];         // LK window radius + 1
+  std::vector<std::uint8_t> usable_search_[2];  // coarse window
+  StereoLuma luma_;
+  FeatureDetector detector_;
+  std::vector<Feature> features_;
+  EpipolarCurve curve_, back_curve_;
+  std::vector<double> rays_;            // left pixel centres' normalized rays (x, y)
+  std::vector<Eigen::Vector2d> shape_;  // the LK template's predicted places in the right image
+};
+
+}  // namespace naneye::recon::scene

@@ -1,0 +1,98 @@
+// Epipolar curve sampling and the coarse ZNCC search along it (epipolar_match.hpp).
+#include "naneye/recon/scene/epipolar_match.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace naneye::recon::scene {
+namespace {
+Eigen::Vector2d curve_point(const CameraModel& cam, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                            double w, bool& inside) {
+  const Eigen::Vector3d X = a + b * w;  // proportional to the point in the other frame
+  inside = X.z() > 0;
+  const Eigen::Vector2d xn = X.head<2>() / X.z();
+  if (const auto fold = cam.fold_radius_undistorted(); fold && xn.norm() >= *fold) inside = false;
+  return cam.to_pixel(cam.distort(xn));
+}
+}  // namespace
+
+void sample_epipolar_curve(const CameraModel& other, const Eigen::Matrix3d& R, const Eigen::Vector3d& T,
+                           const Eigen::Vector2d& xn, double w_min, double w_max, double step_px,
+                           EpipolarCurve& out) {
+  const Eigen::Vector3d a = R * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
+  bool in0 = false, in1 = false;
+  const Eigen::Vector2d p0 = curve_point(other, a, T, w_min, in0), p1 = curve_point(other, a, T, w_max, in1);
+  // The curve bends only slightly over tens of pixels: its chord sets the sample count.
+  const double len = (p1 - p0).norm();
+  out.n = std::clamp(static_cast<int>(std::ceil(len / step_px)) + 1, 2, EpipolarCurve::kMaxSamples);
+  for (int i = 0; i < out.n; ++i) {
+    const double w = w_min + (w_max - w_min) * i / (out.n - 1);
+    bool inside = false;
+    out.px[i] = curve_point(other, a, T, w, inside);
+    out.w[i] = w;
+    out.inside[i] = inside;
+  }
+}
+
+CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& dst,
+                             const std::uint8_t* dst_usable, const EpipolarCurve& curve, int radius) {
+  constexpr int kMaxWin = 15 * 15;
+  const int side = 2 * radius + 1, n = side * side;
+  CurveMatch m;
+  if (n > kMaxWin) return m;
+  std::array<float, kMaxWin> t{};
+  double mean = 0;
+  for (int dr = -radius, k = 0; dr <= radius; ++dr)
+    for (int dc = -radius; dc <= radius; ++dc, ++k) mean += t[k] = src.at(u + dc, v + dr);
+  mean /= n;
+  double var = 0;
+  for (int k = 0; k < n; ++k) {
+    t[k] = static_cast<float>(t[k] - mean);
+    var += double(t[k]) * t[k];
+  }
+  if (!(var > 0)) return m;
+  const double tnorm = std::sqrt(var);
+  std::array<double, EpipolarCurve::kMaxSamples> score{};
+  int best = -1;
+  for (int i = 0; i < curve.n; ++i) {
+    score[i] = -2;
+    if (!curve.inside[i]) continue;
+    const int c = static_cast<int>(std::lround(curve.px[i].x())),
+              r = static_cast<int>(std::lround(curve.px[i].y()));
+    if (c < 0 || r < 0 || c >= dst.width || r >= dst.height || !dst_usable[r * dst.width + c]) continue;
+    // sum t' (I - mean_I) = sum t' I since sum t' = 0.
+    double s = 0, si = 0, sii = 0;
+    for (int dr = -radius, k = 0; dr <= radius; ++dr) {
+      const float* row = dst.data + (r + dr) * dst.width + c;
+      for (int dc = -radius; dc <= radius; ++dc, ++k) {
+        const double val = row[dc];
+        s += t[k] * val;
+        si += val;
+        sii += val * val;
+      }
+    }
+    const double vi = sii - si * si / n;
+    if (!(vi > 0)) continue;
+    score[i] = s / (tnorm * std::sqrt(vi));
+    if (best < 0 || score[i] > score[best]) best = i;
+  }
+  if (best < 0) return m;
+  m.found = true;
+  m.best = score[best];
+  for (int i = 0; i < curve.n; ++i)
+    if (std::abs(i - best) >= 2) m.second = std::max(m.second, score[i]);
+  double frac = 0;
+  if (best > 0 && best + 1 < curve.n && score[best - 1] > -2 && score[best + 1] > -2) {
+    const double a = score[best - 1], b = score[best], c = score[best + 1];
+    const double den = a - 2 * b + c;
+    if (den < 0) frac = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
+  }
+  m.index = best + frac;
+  const int j = frac >= 0 ? std::min(best + 1, curve.n - 1) : std::max(best - 1, 0);
+  const double f = std::abs(frac);
+  m.px = (1 - f) * curve.px[best] + f * curve.px[j];
+  m.w = (1 - f) * curve.w[best] + f * curve.w[j];
+  return m;
+}
+
+}  // namespace naneye::recon::scene

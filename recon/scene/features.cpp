@@ -1,0 +1,95 @@
+// Shi-Tomasi features spread over the image by a grid (features.hpp).
+#include "naneye/recon/scene/features.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace naneye::recon::scene {
+
+double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask) {
+  const int w = img.width, h = img.height;
+  double sum = 0;
+  long n = 0;
+  for (int r = 1; r + 1 < h; ++r)
+    for (int c = 1; c + 1 < w; ++c) {
+      if (mask) {
+        bool ok = true;
+        for (int dr = -1; dr <= 1 && ok; ++dr)
+          for (int dc = -1; dc <= 1 && ok; ++dc) ok = mask[(r + dr) * w + c + dc] != 0;
+        if (!ok) continue;
+      }
+      const double v = img.at(c - 1, r - 1) - 2 * img.at(c, r - 1) + img.at(c + 1, r - 1) -
+                       2 * img.at(c - 1, r) + 4 * img.at(c, r) - 2 * img.at(c + 1, r) + img.at(c - 1, r + 1) -
+                       2 * img.at(c, r + 1) + img.at(c + 1, r + 1);
+      sum += std::abs(v);
+      ++n;
+    }
+  if (n == 0) return 0;
+  // Immerkaer Eq. 6: sigma = sqrt(pi / 2) / 6 * mean |I * N|  (the mask's L2 norm is 6).
+  return std::sqrt(std::numbers::pi / 2) / 6.0 * sum / static_cast<double>(n);
+}
+
+FeatureDetector::FeatureDetector(int width, int height, const FeatureSettings& s)
+    : s_(s), w_(width), h_(height) {
+  const std::size_t np = static_cast<std::size_t>(w_) * h_;
+  const std::size_t ni = static_cast<std::size_t>(w_ + 1) * (h_ + 1);
+  gx_.assign(np, 0.f);
+  gy_.assign(np, 0.f);
+  ixx_.assign(ni, 0.0);
+  ixy_.assign(ni, 0.0);
+  iyy_.assign(ni, 0.0);
+}
+
+void FeatureDetector::detect(const GrayView& img, const std::uint8_t* usable, double noise_sigma,
+                             std::vector<Feature>& out) {
+  out.clear();
+  const int w = w_, h = h_;
+  // Central differences, the gradient the sub-pixel matcher uses (lk_affine.cpp).
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * w + c;
+      gx_[p] = (c > 0 && c + 1 < w) ? 0.5f * (img.at(c + 1, r) - img.at(c - 1, r)) : 0.f;
+      gy_[p] = (r > 0 && r + 1 < h) ? 0.5f * (img.at(c, r + 1) - img.at(c, r - 1)) : 0.f;
+    }
+  const int W = w + 1;
+  for (int r = 0; r < h; ++r) {
+    double sxx = 0, sxy = 0, syy = 0;
+    for (int c = 0; c < w; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * w + c;
+      sxx += double(gx_[p]) * gx_[p];
+      sxy += double(gx_[p]) * gy_[p];
+      syy += double(gy_[p]) * gy_[p];
+      const std::size_t q = static_cast<std::size_t>(r + 1) * W + c + 1,
+                        qa = static_cast<std::size_t>(r) * W + c + 1;
+      ixx_[q] = ixx_[qa] + sxx;
+      ixy_[q] = ixy_[qa] + sxy;
+      iyy_[q] = iyy_[qa] + syy;
+    }
+  }
+  auto box = [&](const std::vector<double>& I, int c0, int r0, int c1, int r1) {
+    return I[static_cast<std::size_t>(r1) * W + c1] - I[static_cast<std::size_t>(r0) * W + c1] -
+           I[static_cast<std::size_t>(r1) * W + c0] + I[static_cast<std::size_t>(r0) * W + c0];
+  };
+  // lambda_min needed for the shift sigma bound: sigma_t^2 = 2 sigma_n^2 / lambda_min (two noisy images).
+  const double need = 2.0 * noise_sigma * noise_sigma / (s_.max_shift_sigma_px * s_.max_shift_sigma_px);
+  const int rad = s_.window_radius, cell = s_.cell_px;
+  for (int cr = 0; cr < h; cr += cell)
+    for (int cc = 0; cc < w; cc += cell) {
+      Feature best;
+      best.min_eig = -1;
+      for (int r = cr; r < std::min(h, cr + cell); ++r)
+        for (int c = cc; c < std::min(w, cc + cell); ++c) {
+          if (!usable[r * w + c]) continue;
+          const int c0 = c - rad, r0 = r - rad, c1 = c + rad + 1, r1 = r + rad + 1;
+          if (c0 < 0 || r0 < 0 || c1 > w || r1 > h) continue;
+          const double a = box(ixx_, c0, r0, c1, r1), b = box(ixy_, c0, r0, c1, r1),
+                       d = box(iyy_, c0, r0, c1, r1);
+          const double lmin = 0.5 * (a + d) - std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+          if (lmin > best.min_eig) best = Feature{c, r, static_cast<float>(lmin)};
+        }
+      if (best.min_eig >= need && best.min_eig > 0 && out.size() < out.capacity()) out.push_back(best);
+    }
+}
+
+}  // namespace naneye::recon::scene

@@ -1,0 +1,217 @@
+// The sparse scene path (sparse.hpp): features -> epipolar ZNCC -> affine LK -> left-right check ->
+// niter2 + refinement, with the depth sigma of each match's own precision.
+#include "naneye/recon/scene/sparse.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+#include "naneye/recon/triangulation.hpp"
+
+namespace naneye::recon::scene {
+namespace {
+
+// Pixels whose ray exists (inside the fold) and that carry image data (RawImageView's ignored
+// padding column and edge rows excluded), eroded so that a window of `radius` fits.
+std::vector<std::uint8_t> usable_mask(const CameraModel& cam, const RawImageView& layout, int radius) {
+  const int w = cam.width(), h = cam.height();
+  std::vector<std::uint8_t> base(static_cast<std::size_t>(w) * h, 0), out(base.size(), 0);
+  for (int r = layout.ignore_edge_rows; r < h - layout.ignore_edge_rows; ++r)
+    for (int c = 0; c < w - layout.ignore_last_cols; ++c)
+      base[static_cast<std::size_t>(r) * w + c] = cam.undistort(Eigen::Vector2d(c, r)).ok() ? 1 : 0;
+  for (int r = radius; r < h - radius; ++r)
+    for (int c = radius; c < w - radius; ++c) {
+      bool ok = true;
+      for (int dr = -radius; dr <= radius && ok; ++dr)
+        for (int dc = -radius; dc <= radius && ok; ++dc)
+          ok = base[static_cast<std::size_t>(r + dr) * w + c + dc] != 0;
+      out[static_cast<std::size_t>(r) * w + c] = ok ? 1 : 0;
+    }
+  return out;
+}
+
+// The local left -> right raw pixel map at depth 1 / w for a surface facing the camera:
+// J_r (d x_r / d x_l) J_l^-1 with J = K_2x2 d(distort)/dx (paper Eq. 5-6). The LK start warp.
+Eigen::Matrix2d predicted_affine(const StereoRig& rig, const Eigen::Vector2d& xl, double w) {
+  const double z = 1.0 / w;
+  const Eigen::Vector3d X(xl.x() * z, xl.y() * z, z);
+  const Eigen::Vector3d Xr = rig.R * X + rig.T;
+  Eigen::Matrix<double, 2, 3> dproj;
+  dproj << 1 / Xr.z(), 0, -Xr.x() / (Xr.z() * Xr.z()), 0, 1 / Xr.z(), -Xr.y() / (Xr.z() * Xr.z());
+  const Eigen::Matrix2d dxr = dproj * rig.R.leftCols<2>() * z;
+  const Eigen::Vector2d xr = Xr.head<2>() / Xr.z();
+  const Eigen::Matrix2d Kl = rig.left.K().topLeftCorner<2, 2>(), Kr = rig.right.K().topLeftCorner<2, 2>();
+  const Eigen::Matrix2d Jl = Kl * rig.left.distort_jacobian(xl), Jr = Kr * rig.right.distort_jacobian(xr);
+  return Jr * dxr * Jl.inverse();
+}
+}  // namespace
+
+const char* to_string(PointStatus s) {
+  switch (s) {
+    case PointStatus::ok:
+      return "ok";
+    case PointStatus::no_candidates:
+      return "no_candidates";
+    case PointStatus::weak_match:
+      return "weak_match";
+    case PointStatus::ambiguous:
+      return "ambiguous";
+    case PointStatus::refinement_failed:
+      return "refinement_failed";
+    case PointStatus::left_right_mismatch:
+      return "left_right_mismatch";
+    case PointStatus::triangulation_failed:
+      return "triangulation_failed";
+  }
+  return "?";
+}
+
+SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSettings& s)
+    : rig_(rig), s_(s), detector_(rig.left.width(), rig.left.height(), s.features) {
+  R_lr_ = rig_.R;
+  T_lr_ = rig_.T;
+  R_rl_ = rig_.R.transpose();
+  T_rl_ = -R_rl_ * rig_.T;
+  const RawImageView layout;
+  usable_[0] = usable_mask(rig_.left, layout, s_.lk.radius + 1);
+  usable_[1] = usable_mask(rig_.right, layout, s_.lk.radius + 1);
+  usable_search_[0] = usable_mask(rig_.left, layout, s_.search_radius);
+  usable_search_[1] = usable_mask(rig_.right, layout, s_.search_radius);
+  const std::size_t np = static_cast<std::size_t>(rig_.left.width()) * rig_.left.height();
+  luma_.width = rig_.left.width();
+  luma_.height = rig_.left.height();
+  luma_.left.assign(np, 0.f);
+  luma_.right.assign(np, 0.f);
+  luma_.scratch.assign(np, 0.f);
+  features_.reserve(static_cast<std::size_t>(s_.max_features));
+  rays_.assign(2 * np, 0.0);
+  for (int r = 0; r < luma_.height; ++r)
+    for (int c = 0; c < luma_.width; ++c) {
+      const Undistorted u = rig_.left.undistort(Eigen::Vector2d(c, r));
+      if (!u.ok()) continue;  // never read: features' windows lie inside the domain
+      const std::size_t i = static_cast<std::size_t>(r) * luma_.width + c;
+      rays_[2 * i] = u.normalized.x();
+      rays_[2 * i + 1] = u.normalized.y();
+    }
+  const int side = 2 * s_.lk.radius + 1;
+  shape_.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
+}
+
+void SparseReconstructor::load_luma(const RawImageView& left, const RawImageView& right) {
+  raw_to_luminance(left, luma_.left.data(), luma_.scratch.data());
+  raw_to_luminance(right, luma_.right.data(), luma_.scratch.data());
+  luma_.bayer = left.layout == PixelLayout::bayer_grbg;
+}
+
+void SparseReconstructor::reconstruct(const RawImageView& left, const RawImageView& right,
+                                      SparseResult& out) {
+  load_luma(left, right);
+  reconstruct(luma_, out);
+}
+
+void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out) {
+  out.points.reserve(static_cast<std::size_t>(s_.max_features));
+  out.points.clear();
+  out.valid_count = 0;
+  const GrayView L = luma.left_view();
+  out.noise_sigma_dn = estimate_noise_sigma(L, usable_search_[0].data());
+  detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
+  int id = 0;
+  for (const Feature& f : features_) {
+    ScenePoint p;
+    p.id = id++;
+    p.left_px = Eigen::Vector2d(f.u, f.v);
+    p.right_px.setConstant(std::numeric_limits<double>::quiet_NaN());
+    match(luma, f, p);
+    out.valid_count += p.valid();
+    out.points.push_back(p);
+  }
+}
+
+void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, ScenePoint& p) {
+  const GrayView L = luma.left_view(), R = luma.right_view();
+  const Undistorted ul = rig_.left.undistort(p.left_px);
+  if (!ul.ok()) {
+    p.status = PointStatus::no_candidates;
+    return;
+  }
+  const double w_min = 1.0 / s_.z_max_mm, w_max = 1.0 / s_.z_min_mm;
+  sample_epipolar_curve(rig_.right, R_lr_, T_lr_, ul.normalized, w_min, w_max, s_.search_step_px, curve_);
+  const CurveMatch m = match_along_curve(L, f.u, f.v, R, usable_search_[1].data(), curve_, s_.search_radius);
+  if (!m.found) {
+    p.status = PointStatus::no_candidates;
+    return;
+  }
+  p.zncc = m.best;
+  if (m.best < s_.min_zncc) {
+    p.status = PointStatus::weak_match;
+    return;
+  }
+  if (m.second > -1 && (1 - m.best) > s_.max_ambiguity * (1 - m.second)) {
+    p.status = PointStatus::ambiguous;
+    return;
+  }
+  const Eigen::Matrix2d A0 = predicted_affine(rig_, ul.normalized, m.w);
+  // Where each template pixel lands in the right image for a surface facing the camera at the
+  // coarse depth (exact model): near the image edges the map bends within the window.
+  {
+    const double z = 1.0 / m.w;
+    const Eigen::Vector3d Xc =
+        rig_.R * Eigen::Vector3d(ul.normalized.x(), ul.normalized.y(), 1.0) * z + rig_.T;
+    const Eigen::Vector2d c0 = rig_.right.project(Xc);
+    const int rad = s_.lk.radius;
+    for (int dr = -rad, k = 0; dr <= rad; ++dr)
+      for (int dc = -rad; dc <= rad; ++dc, ++k) {
+        const std::size_t i = static_cast<std::size_t>(f.v + dr) * luma.width + f.u + dc;
+        const Eigen::Vector3d ray(rays_[2 * i], rays_[2 * i + 1], 1.0);
+        shape_[k] = rig_.right.project(rig_.R * ray * z + rig_.T) - c0;
+      }
+  }
+  LkSettings lks = s_.lk;
+  if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
+  const LkResult lk = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, R, usable_[1].data(), m.px,
+                                    A0, shape_.data(), lks);
+  if (!lk.converged || lk.zncc < s_.min_final_zncc) {
+    p.status = PointStatus::refinement_failed;
+    p.zncc = lk.converged ? lk.zncc : p.zncc;
+    return;
+  }
+  p.zncc = lk.zncc;
+  p.right_px = lk.px;
+  // Left-right check: the right window, searched along its own curve in the left image, must come
+  // back to the feature.
+  const Undistorted ur = rig_.right.undistort(lk.px);
+  const int ru = static_cast<int>(std::lround(lk.px.x())), rv = static_cast<int>(std::lround(lk.px.y()));
+  if (!ur.ok() || !usable_search_[1][static_cast<std::size_t>(rv) * R.width + ru]) {
+    p.status = PointStatus::refinement_failed;
+    return;
+  }
+  sample_epipolar_curve(rig_.left, R_rl_, T_rl_, rig_.right.undistort(Eigen::Vector2d(ru, rv)).normalized,
+                        w_min, w_max, s_.search_step_px, back_curve_);
+  const CurveMatch back =
+      match_along_curve(R, ru, rv, L, usable_search_[0].data(), back_curve_, s_.search_radius);
+  // The back search starts from the rounded right pixel: allow for that rounding.
+  const Eigen::Vector2d rounding = Eigen::Vector2d(ru, rv) - lk.px;
+  if (!back.found || (back.px - rounding - p.left_px).norm() > s_.lr_tolerance_px) {
+    p.status = PointStatus::left_right_mismatch;
+    return;
+  }
+  const Triangulated t = triangulate(rig_, p.left_px, lk.px, TriangulationMethod::refined, 1.0);
+  if (!t.ok() || !(t.X.z() > 0)) {
+    p.status = PointStatus::triangulation_failed;
+    return;
+  }
+  // First-order propagation through the least-squares triangulation, X = (J^T J)^-1 J^T m: the whole
+  // match error is the right pixel's (the feature is a pixel centre by definition), with the LK
+  // covariance of lk_affine.hpp.
+  const Eigen::Matrix<double, 4, 3> J = reprojection_jacobian(rig_, t.X);
+  const Eigen::Matrix3d JtJ = J.transpose() * J;
+  const Eigen::Matrix<double, 3, 4> G = JtJ.inverse() * J.transpose();
+  const Eigen::Matrix<double, 3, 2> Gr = G.rightCols<2>();
+  const Eigen::Matrix3d cov = Gr * lk.cov * Gr.transpose();
+  p.X = t.X;
+  p.depth_sigma_mm = std::sqrt(cov(2, 2));
+  p.status = PointStatus::ok;
+}
+
+}  // namespace naneye::recon::scene

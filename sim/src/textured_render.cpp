@@ -1,0 +1,206 @@
+// Rendering of the textured scenes of textured.hpp: exact rays per sub-sample (CameraModel::undistort),
+// analytic intersection, solid texture, a point light at the camera with cos(incidence) / d^2, the
+// lens's cos^4, then the sensor of sensor.hpp (blur, Bayer gains, shot and read noise, 10 bits).
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+
+#include "naneye/driver/frame.hpp"
+#include "naneye/sim/textured.hpp"
+
+namespace naneye::sim {
+namespace {
+constexpr int kSize = driver::kSensorSize;
+
+struct Wave3 {
+  Eigen::Vector3d k;  // rad/mm
+  double phase;
+};
+
+std::vector<Wave3> texture_waves(const TextureSettings& t) {
+  Rng g(t.seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  std::vector<Wave3> w(static_cast<std::size_t>(std::max(1, t.components)));
+  for (auto& c : w) {
+    Eigen::Vector3d dir(n01(g), n01(g), n01(g));
+    dir.normalize();
+    const double f =
+        1.0 / t.wavelength_max_mm + u01(g) * (1.0 / t.wavelength_min_mm - 1.0 / t.wavelength_max_mm);
+    c.k = 2 * std::numbers::pi * f * dir;
+    c.phase = 2 * std::numbers::pi * u01(g);
+  }
+  return w;
+}
+
+double reflectance(const std::vector<Wave3>& w, const TextureSettings& t, const Eigen::Vector3d& X) {
+  double s = 0;
+  for (const auto& c : w) s += std::cos(c.k.dot(X) + c.phase);
+  // Each cos has variance 1/2: the sum / sqrt(K / 2) has unit variance.
+  const double v = t.mean + t.contrast * s / std::sqrt(0.5 * static_cast<double>(w.size()));
+  return std::clamp(v, 0.02, 1.0);
+}
+
+// Active pixels a point may be seen at: column 249 and the last row are padding/reference.
+bool in_active(const Eigen::Vector2d& px) {
+  return px.x() >= -0.5 && px.x() <= kSize - 1.5 && px.y() >= -0.5 && px.y() <= kSize - 1.5;
+}
+}  // namespace
+
+TexturedRenderer::TexturedRenderer(const recon::StereoRig& rig, const SensorSettings& sensor, int supersample)
+    : rig_(rig), sensor_(sensor), n_(std::max(1, supersample)) {
+  rays_[0] = build(rig_.left);
+  rays_[1] = build(rig_.right);
+}
+
+TexturedRenderer::Rays TexturedRenderer::build(const recon::CameraModel& cam) const {
+  Rays r;
+  const std::size_t np = static_cast<std::size_t>(kSize) * kSize;
+  r.sub.assign(np * n_ * n_ * 2, NAN);
+  r.centre.assign(np * 2, NAN);
+  r.cos4.assign(np, 0.f);
+  for (int row = 0; row < kSize; ++row)
+    for (int col = 0; col < kSize; ++col) {
+      const std::size_t p = static_cast<std::size_t>(row) * kSize + col;
+      for (int i = 0; i < n_; ++i)
+        for (int j = 0; j < n_; ++j) {
+          const Eigen::Vector2d px(col - 0.5 + (j + 0.5) / n_, row - 0.5 + (i + 0.5) / n_);
+          const recon::Undistorted u = cam.undistort(px);
+          if (!u.ok()) continue;
+          const std::size_t k = (p * n_ * n_ + static_cast<std::size_t>(i * n_ + j)) * 2;
+          r.sub[k] = static_cast<float>(u.normalized.x());
+          r.sub[k + 1] = static_cast<float>(u.normalized.y());
+        }
+      const recon::Undistorted u = cam.undistort(Eigen::Vector2d(col, row));
+      if (!u.ok()) continue;
+      r.centre[2 * p] = static_cast<float>(u.normalized.x());
+      r.centre[2 * p + 1] = static_cast<float>(u.normalized.y());
+      const double c2 = 1.0 / (1.0 + u.normalized.squaredNorm());
+      r.cos4[p] = static_cast<float>(c2 * c2);
+    }
+  return r;
+}
+
+void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, cv::Mat& out) const {
+  out.create(kSize, kSize, CV_32FC1);
+  const auto waves = texture_waves(scene.texture);
+  const Rays& rt = rays_[eye];
+  const Eigen::Vector3d o = eye == 0 ? Eigen::Vector3d::Zero() : rig_.right_center();
+  const Eigen::Matrix3d Rt = eye == 0 ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(rig_.R.transpose());
+  const double ref2 = scene.light_reference_mm * scene.light_reference_mm;
+  const int nn = n_ * n_;
+  for (int row = 0; row < kSize; ++row) {
+    float* dst = out.ptr<float>(row);
+    for (int col = 0; col < kSize; ++col) {
+      const std::size_t p = static_cast<std::size_t>(row) * kSize + col;
+      double sum = 0;
+      for (int k = 0; k < nn; ++k) {
+        const float x = rt.sub[(p * nn + k) * 2], y = rt.sub[(p * nn + k) * 2 + 1];
+        if (std::isnan(x)) continue;  // beyond the fold: no ray, no light
+        const Eigen::Vector3d d = (Rt * Eigen::Vector3d(x, y, 1.0)).normalized();
+        const auto t = scene.surface.intersect(o, d);
+        if (!t) continue;
+        const Eigen::Vector3d X = o + *t * d;
+        const Eigen::Vector3d l = scene.light_mm - X;
+        const double d2 = l.squaredNorm();
+        const double cos_i = std::abs(scene.surface.normal(X).dot(l)) / std::sqrt(d2);
+        sum += reflectance(waves, scene.texture, X) * cos_i * ref2 / d2;
+      }
+      dst[col] = static_cast<float>(sum / nn * (sensor_.vignetting ? rt.cos4[p] : 1.0f));
+    }
+  }
+}
+
+void TexturedRenderer::apply_sensor(int eye, const cv::Mat& light, Rng& rng, cv::Mat& out) const {
+  cv::Mat blurred = light;
+  if (sensor_.blur) {
+    const double sigma = sensor_.blur_sigma_px();
+    const int k = 2 * static_cast<int>(std::ceil(3.0 * sigma)) + 1;
+    cv::GaussianBlur(light, blurred, cv::Size(k, k), sigma, sigma, cv::BORDER_REPLICATE);
+  }
+  cv::Mat noise;
+  if (sensor_.noise) {
+    cv::RNG cv_rng(rng());
+    noise.create(kSize, kSize, CV_32FC1);
+    cv_rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
+  }
+  out.create(kSize, kSize, CV_16UC1);
+  const auto& g = sensor_.channel_gain;
+  for (int r = 0; r < kSize; ++r) {
+    const float* in = blurred.ptr<float>(r);
+    std::uint16_t* o = out.ptr<std::uint16_t>(r);
+    for (int c = 0; c < kSize; ++c) {
+      double gain = 1.0;
+      if (sensor_.bayer) gain = (r & 1) == 0 ? ((c & 1) == 0 ? g[1] : g[0]) : ((c & 1) == 0 ? g[2] : g[1]);
+      const double signal = std::max(0.0, static_cast<double>(in[c]) * sensor_.white_dn * gain);
+      double dn = sensor_.black_level_dn + signal;
+      if (sensor_.noise)
+        dn += std::sqrt(signal / sensor_.gain_e_per_dn + sensor_.read_noise_dn * sensor_.read_noise_dn) *
+              noise.at<float>(r, c);
+      o[c] =
+          static_cast<std::uint16_t>(std::clamp(std::lround(dn), 0L, static_cast<long>(driver::kPixelMax)));
+    }
+  }
+  std::uint16_t* px = out.ptr<std::uint16_t>();
+  if (sensor_.reference_pixels) {
+    for (int c = 0; c < 4; ++c) px[c] = sensor_.reference_row0[c];
+    px[(kSize - 1) * kSize + kSize - 4] = sensor_.reference_row249[0];
+    px[(kSize - 1) * kSize + kSize - 3] = sensor_.reference_row249[1];
+  }
+  for (int r = 0; r < kSize; ++r) px[r * kSize + kSize - 1] = sensor_.padding_value;
+  px[(kSize - 1) * kSize + kSize - 2] = sensor_.padding_value;
+  (void)eye;
+}
+
+bool TexturedRenderer::right_sees(const Surface& s, const Eigen::Vector3d& X) const {
+  const Eigen::Vector3d Xr = rig_.R * X + rig_.T;
+  if (!(Xr.z() > 0)) return false;
+  const Eigen::Vector2d px = rig_.right.project(Xr);
+  if (!in_active(px)) return false;
+  // A projection beyond the fold is a folded-back number no ray reaches: the round trip tells.
+  const recon::Undistorted u = rig_.right.undistort(px);
+  if (!u.ok() || (u.normalized - Xr.head<2>() / Xr.z()).norm() > 1e-9) return false;
+  const Eigen::Vector3d c = rig_.right_center();
+  const Eigen::Vector3d d = X - c;
+  const double len = d.norm();
+  const auto t = s.intersect(c, d / len);
+  return t && *t >= len * (1 - 1e-9);
+}
+
+std::optional<double> TexturedRenderer::truth_depth_at(const Surface& s,
+                                                       const Eigen::Vector2d& left_px) const {
+  if (!in_active(left_px)) return std::nullopt;
+  const recon::Undistorted u = rig_.left.undistort(left_px);
+  if (!u.ok()) return std::nullopt;
+  const Eigen::Vector3d d = Eigen::Vector3d(u.normalized.x(), u.normalized.y(), 1.0).normalized();
+  const auto t = s.intersect(Eigen::Vector3d::Zero(), d);
+  if (!t) return std::nullopt;
+  const Eigen::Vector3d X = *t * d;
+  if (!right_sees(s, X)) return std::nullopt;
+  return X.z();
+}
+
+cv::Mat TexturedRenderer::truth_depth(const Surface& s) const {
+  cv::Mat depth(kSize, kSize, CV_64FC1, cv::Scalar(NAN));
+  for (int r = 0; r < kSize; ++r)
+    for (int c = 0; c < kSize; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * kSize + c;
+      if (std::isnan(rays_[0].centre[2 * p])) continue;
+      if (auto z = truth_depth_at(s, Eigen::Vector2d(c, r))) depth.at<double>(r, c) = *z;
+    }
+  return depth;
+}
+
+TexturedPair TexturedRenderer::render(const TexturedSceneSettings& scene, Rng& rng) const {
+  TexturedPair out;
+  cv::Mat light;
+  irradiance(0, scene, light);
+  apply_sensor(0, light, rng, out.left);
+  irradiance(1, scene, light);
+  apply_sensor(1, light, rng, out.right);
+  out.depth = truth_depth(scene.surface);
+  return out;
+}
+
+}  // namespace naneye::sim

@@ -1,0 +1,33 @@
+#pragma once
+// Rendered textured scenes shared by the scene tests (one Renderer per sensor, one render per scene).
+#include <map>
+#include <string>
+#include <utility>
+
+#include "../support/paper_rig.hpp"
+#include "naneye/sim/textured.hpp"
+
+namespace naneye::test {
+
+inline const sim::TexturedRenderer& textured_renderer(bool bayer) {
+  static const sim::TexturedRenderer mono(paper_d3(), sim::SensorSettings{});
+  static const sim::TexturedRenderer colour(paper_d3(), [] {
+    sim::SensorSettings s;
+    s.bayer = true;
+    return s;
+  }());
+  return bayer ? colour : mono;
+}
+
+inline const sim::TexturedPair& textured_pair(const std::string& preset, bool bayer, std::uint64_t seed = 5) {
+  static std::map<std::tuple<std::string, bool, std::uint64_t>, sim::TexturedPair> cache;
+  const auto key = std::make_tuple(preset, bayer, seed);
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    sim::Rng rng(seed);
+    it = cache.emplace(key, textured_renderer(bayer).render(*sim::textured_preset(preset), rng)).first;
+  }
+  return it->second;
+}
+
+}  // namespace naneye::test

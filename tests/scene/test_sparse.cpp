@@ -1,0 +1,86 @@
+// Sparse scene reconstruction (recon/scene/sparse.hpp) on the textured scenes against their truth.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "naneye/recon/scene/sparse.hpp"
+#include "scene_fixture.hpp"
+
+namespace naneye {
+namespace {
+
+struct SparseFigures {
+  int features = 0, valid = 0, outliers = 0, unseen = 0, outside = 0;
+  double rel_rms = 0, z_rms = 0;  // over the inliers
+};
+
+// Outlier: relative depth error above 5 % (the bad-5 % line).
+SparseFigures evaluate(const std::string& name, bool bayer, recon::scene::SparseResult& res) {
+  const auto& rig = test::paper_d3();
+  const auto& p = test::textured_pair(name, bayer);
+  recon::scene::SparseReconstructor sr(rig);
+  sr.reconstruct(sim::raw_view(p.left, bayer), sim::raw_view(p.right, bayer), res);
+  SparseFigures f;
+  f.features = static_cast<int>(res.points.size());
+  double rel2 = 0, z2 = 0;
+  int inl = 0;
+  for (const auto& q : res.points) {
+    if (!q.valid()) {
+      EXPECT_TRUE(std::isnan(q.X.z()));
+      continue;
+    }
+    ++f.valid;
+    if (!rig.left.in_domain(q.left_px) || !rig.right.in_domain(q.right_px)) ++f.outside;
+    const double zt = p.depth.at<double>(static_cast<int>(q.left_px.y()), static_cast<int>(q.left_px.x()));
+    if (std::isnan(zt)) {
+      ++f.unseen;
+      continue;
+    }
+    const double e = q.X.z() - zt;
+    if (std::abs(e) / zt > 0.05) {
+      ++f.outliers;
+      continue;
+    }
+    ++inl;
+    rel2 += (e / zt) * (e / zt);
+    z2 += (e / q.depth_sigma_mm) * (e / q.depth_sigma_mm);
+  }
+  f.rel_rms = std::sqrt(rel2 / std::max(1, inl));
+  f.z_rms = std::sqrt(z2 / std::max(1, inl));
+  std::printf(
+      "%-10s %-5s features %4d valid %4d outliers %3d unseen %d outside %d  depth err rms %.2f %%  "
+      "rms(err/sigma) %.2f  noise %.2f DN\n",
+      name.c_str(), bayer ? "bayer" : "mono", f.features, f.valid, f.outliers, f.unseen, f.outside,
+      100 * f.rel_rms, f.z_rms, res.noise_sigma_dn);
+  return f;
+}
+
+class SparseScene : public ::testing::TestWithParam<std::tuple<std::string, bool>> {};
+
+TEST_P(SparseScene, AgainstTruth) {
+  const auto& [name, bayer] = GetParam();
+  recon::scene::SparseResult res;
+  const SparseFigures f = evaluate(name, bayer, res);
+  // No point where one eye cannot see the surface, none beyond a model's domain.
+  EXPECT_EQ(f.unseen, 0);
+  EXPECT_EQ(f.outside, 0);
+  EXPECT_GE(f.valid - f.outliers, 300);
+  EXPECT_LE(f.outliers, 0.01 * f.valid);
+  // Sigmas that hold.
+  EXPECT_GE(f.z_rms, 0.7);
+  EXPECT_LE(f.z_rms, 1.4);
+}
+
+INSTANTIATE_TEST_SUITE_P(Presets, SparseScene,
+                         ::testing::Combine(::testing::Values("plane", "plane-far", "sphere", "tube",
+                                                              "height"),
+                                            ::testing::Bool()),
+                         [](const auto& info) {
+                           std::string n = std::get<0>(info.param);
+                           for (auto& c : n)
+                             if (c == '-') c = '_';
+                           return n + (std::get<1>(info.param) ? "_bayer" : "_mono");
+                         });
+
+}  // namespace
+}  // namespace naneye
