@@ -76,7 +76,10 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
         if (auto problem = daemon::rig_problem(*rig, driver::kSensorSize)) {
           why = *problem;
         } else {
-          pipeline.reload_rig(std::move(rig));
+          // The new maps are built here, not on the worker: it only swaps the processor in.
+          auto prepared = daemon::make_processor(settings);
+          prepared->set_rig(*rig);
+          pipeline.reload(std::move(rig), std::move(prepared));
         }
       } catch (const std::exception& e) {
         why = e.what();

@@ -49,6 +49,7 @@ Pipeline::Pipeline(const Settings& settings, std::unique_ptr<PairProcessor> proc
       frames_(4) {
   processor_->set_rig(*rig_);
   rig_applied_ = rig_;
+  processor_name_ = std::string(processor_->name());
 }
 
 Pipeline::~Pipeline() {
@@ -106,6 +107,15 @@ void Pipeline::reload_rig(std::shared_ptr<const recon::StereoRig> rig) {
   rig_pending_.store(true);
 }
 
+void Pipeline::reload(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared) {
+  {
+    std::lock_guard lock(rig_mu_);
+    rig_ = std::move(rig);
+    prepared_ = std::move(prepared);  // an earlier one not yet taken is replaced: the newest wins
+  }
+  rig_pending_.store(true);
+}
+
 void Pipeline::reload_refused(std::string reason) {
   reload_failures_.fetch_add(1);
   const double at = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
@@ -129,9 +139,19 @@ void Pipeline::run() {
   while (!stop_.load()) {
     heartbeat_.fetch_add(1, std::memory_order_relaxed);
     if (rig_pending_.exchange(false)) {
-      auto next = rig();
+      std::shared_ptr<const recon::StereoRig> next;
+      std::unique_ptr<PairProcessor> prepared;
+      {
+        std::lock_guard lock(rig_mu_);
+        next = rig_;
+        prepared = std::move(prepared_);
+      }
       try {
-        processor_->set_rig(*next);
+        if (prepared && prepared->name() == processor_name_) {
+          processor_.swap(prepared);  // the previous one is freed when `prepared` goes
+        } else {
+          processor_->set_rig(*next);
+        }
         rig_applied_ = next;
         reloads_.fetch_add(1);
         {
@@ -259,7 +279,7 @@ void Pipeline::handle(driver::PairPtr pair) {
 PipelineStatus Pipeline::status() const {
   PipelineStatus s;
   s.choice = choice_;
-  s.processor = std::string(processor_->name());
+  s.processor = processor_name_;
   s.pairs_processed = processed_.load(std::memory_order_relaxed);
   s.publish_skipped = skipped_.load(std::memory_order_relaxed);
   s.source_opens = opens_.load();

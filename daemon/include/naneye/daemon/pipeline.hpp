@@ -98,6 +98,10 @@ class Pipeline {
 
   // From any thread: the worker switches to `rig` between two pairs; HTTP readers see it at once.
   void reload_rig(std::shared_ptr<const recon::StereoRig> rig);
+  // The same with a processor already set to `rig` on the caller's thread (make_processor, then
+  // set_rig): the worker only swaps it in between two pairs, so building the new maps never delays
+  // a pair (a SIGHUP storm made a live source drop pairs while the worker rebuilt them).
+  void reload(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared);
   // Records a reload that was refused before reaching the pipeline (unreadable, or not valid for
   // the sensor: rig_check.hpp); the rig in use stays.
   void reload_refused(std::string reason);
@@ -129,7 +133,9 @@ class Pipeline {
   mutable std::mutex rig_mu_;  // HTTP readers and reloads only; the worker takes it once per reload
   std::shared_ptr<const recon::StereoRig> rig_;
   std::atomic<bool> rig_pending_{false};
+  std::unique_ptr<PairProcessor> prepared_;  // guarded by rig_mu_: reload()'s, for the worker to take
   std::shared_ptr<const recon::StereoRig> rig_applied_;  // worker only: the rig the processor has
+  std::string processor_name_;                           // fixed: every processor comes from the settings
   mutable std::mutex reload_mu_;                         // guards last_reload_ (a reload's outcome, rare)
   std::optional<PipelineStatus::Reload> last_reload_;
   std::atomic<std::uint64_t> reload_failures_{0};
