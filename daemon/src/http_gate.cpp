@@ -250,13 +250,15 @@ void Gate::poll_loop() {
       incoming_.clear();
     }
     // Over the cap (counting connections a worker holds: every one is a descriptor), the oldest
-    // idle keep-alive connections make room, else the newest is refused.
+    // connection that has sent nothing (an idle keep-alive one, or one that connected and stayed
+    // silent: an idle flood) makes room; when the newest is the only such one, or every other is
+    // in the middle of a request, the newest is refused.
     while (open_.load() > cap_ && !conns_.empty()) {
       auto oldest = conns_.end();
       for (auto it = conns_.begin(); it != conns_.end(); ++it) {
-        if ((*it)->idle && (oldest == conns_.end() || (*it)->since < (*oldest)->since)) oldest = it;
+        if ((*it)->buf.empty() && (oldest == conns_.end() || (*it)->since < (*oldest)->since)) oldest = it;
       }
-      if (oldest != conns_.end()) {
+      if (oldest != conns_.end() && oldest + 1 != conns_.end()) {
         counters_.idle_evicted.fetch_add(1, std::memory_order_relaxed);
         close_conn((*oldest)->fd);
         conns_.erase(oldest);
