@@ -76,7 +76,12 @@ void run_record(const RecordOptions& o) {
                       {"source_state", driver::to_string(s.end_state)},
                       {"counters", counters_json(s.counters)}};
   if (s.error) j["error"] = *s.error;
+  if (s.write_error) j["write_error"] = *s.write_error;
   std::cout << j.dump(2) << "\n";
+  if (s.write_error) {
+    throw driver::SourceError("recording stopped: " + *s.write_error + "; " + o.output +
+                              " holds the pairs up to the failure (no end marker)");
+  }
   if (s.error) throw driver::SourceError(*s.error);
 }
 
@@ -162,6 +167,11 @@ void run_replay(const ReplayOptions& o) {
     if (err) std::cout << "error         " << *err << "\n";
   }
   if (err) throw driver::SourceError(*err);
+  // An empty file or one of random bytes is not a capture: said, and a failure for scripts.
+  if (pairs == 0) {
+    throw driver::SourceError(uri + ": no complete stereo pair (" + std::to_string(c.records) +
+                              " records): empty, or not a NanEye capture");
+  }
 }
 
 }  // namespace

@@ -11,7 +11,15 @@ namespace {
 struct Stream {
   HttpContext* ctx;
   std::uint64_t cursor;  // next result number to send
+  std::int64_t last_write_ns;
 };
+
+// With nothing to send, a comment line this often. A client that went away is only seen when a
+// write fails (a closed peer's socket stays writable): without it a stream waiting for a result
+// that never comes (a future last_event_id, a stalled source) held its slot and thread for good.
+// 1 s: the second write after the peer's close fails (the first draws its RST), so a slot is free
+// within ~2 s; 13 bytes a second is nothing next to a result event (~15 kB).
+constexpr std::int64_t kHeartbeatNs = 1'000'000'000;
 
 }  // namespace
 
@@ -24,14 +32,10 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
     if (!int_param(req, res, "last_event_id", 0, INT64_MAX, last)) return;
     if (!last && req.has_header("Last-Event-ID")) {
       const std::string h = req.get_header_value("Last-Event-ID");
-      try {
-        std::size_t used = 0;
-        const long long v = std::stoll(h, &used);
-        if (used != h.size() || v < 0) throw std::invalid_argument(h);
-        last = v;
-      } catch (const std::exception&) {
+      last = strict_int(h, 0, INT64_MAX);
+      if (!last || req.get_header_value_count("Last-Event-ID") > 1) {
         return send_error(res, 400, "bad_parameter",
-                          "Last-Event-ID must be a result number, got \"" + h + "\"");
+                          "Last-Event-ID must be one result number, got \"" + h + "\"");
       }
     }
     if (ctx.sse_clients.fetch_add(1) >= ctx.settings.sse_max_clients) {
@@ -41,12 +45,12 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
     }
     auto stream = std::make_shared<Stream>();
     stream->ctx = &ctx;
-    // Without a resume point, start with the latest result so the client has one at once. A resume
-    // point beyond the latest result comes from an earlier run of the daemon (ids restart at 1): an
-    // EventSource reconnecting to a restarted naneyed would otherwise wait until this run caught up.
+    stream->last_write_ns = monotonic_ns();
+    // Without a resume point, start with the latest result so the client has one at once. An id
+    // beyond the latest is from an earlier run of the daemon (numbers restart at 1): the same.
     const auto latest = ctx.pipeline->results().latest_seq();
-    const bool from_this_run = last && static_cast<std::uint64_t>(*last) <= latest.value_or(0);
-    stream->cursor = from_this_run ? static_cast<std::uint64_t>(*last) + 1 : latest.value_or(1);
+    const bool resumes = last && latest && static_cast<std::uint64_t>(*last) <= *latest;
+    stream->cursor = resumes ? static_cast<std::uint64_t>(*last) + 1 : latest.value_or(1);
     res.set_header("Cache-Control", "no-cache");
     res.set_header("X-Accel-Buffering", "no");
     res.set_chunked_content_provider(
@@ -60,6 +64,11 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
           }
           const auto latest = results.latest_seq();
           if (!latest || stream->cursor > *latest) {
+            if (monotonic_ns() - stream->last_write_ns >= kHeartbeatNs) {
+              stream->last_write_ns = monotonic_ns();
+              static constexpr char kBeat[] = ": keep-alive\n\n";
+              return sink.write(kBeat, sizeof kBeat - 1);
+            }
             // Nothing new: poll (the pipeline does not signal readers, so that it never waits).
             std::this_thread::sleep_for(std::chrono::milliseconds(2));
             return true;
@@ -83,6 +92,7 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
             return true;
           }
           ++stream->cursor;
+          stream->last_write_ns = monotonic_ns();
           c.sse_events.fetch_add(1, std::memory_order_relaxed);
           return sink.write(event.data(), event.size());
         },

@@ -28,10 +28,15 @@ bool valid_utf8(std::string_view s);
 // a header is not UTF-8: such bytes must never reach a JSON body.
 bool reject_bad_encoding(const httplib::Request& req, httplib::Response& res);
 
-// Refuses (400) any query parameter not in `allowed`; true when the request may go on.
+// Refuses (400) any query parameter not in `allowed` or given twice; true when the request may go on.
 bool only_params(const httplib::Request& req, httplib::Response& res,
                  std::initializer_list<const char*> allowed);
-// Parses an optional parameter; on a bad value sends 400 naming it and returns false.
+// Decimal only: no space, no '+', no hex, nothing after the number; nullopt otherwise or when out of
+// [lo, hi] (strict_int) or not finite (strict_double).
+std::optional<std::int64_t> strict_int(std::string_view v, std::int64_t lo, std::int64_t hi);
+std::optional<double> strict_double(std::string_view v);
+// Parses an optional parameter (strictly, given once); on a bad value sends 400 naming it and
+// returns false.
 bool int_param(const httplib::Request& req, httplib::Response& res, const char* name, std::int64_t lo,
                std::int64_t hi, std::optional<std::int64_t>& out);
 bool double_param(const httplib::Request& req, httplib::Response& res, const char* name,

@@ -5,9 +5,12 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <stdexcept>
 
+#include "http_gated_server.hpp"
 #include "http_internal.hpp"
 #include "naneye/daemon/result_json.hpp"
 
@@ -60,28 +63,46 @@ bool only_params(const httplib::Request& req, httplib::Response& res,
                      (list.empty() ? "; this path takes none" : "; accepted: " + list));
       return false;
     }
+    // Which of two values would count is a guess (proxies and frameworks differ): refuse both.
+    if (req.params.count(key) > 1) {
+      send_error(res, 400, "bad_parameter", "parameter \"" + key + "\" is given more than once");
+      return false;
+    }
   }
   return true;
+}
+
+std::optional<std::int64_t> strict_int(std::string_view v, std::int64_t lo, std::int64_t hi) {
+  // Decimal digits with an optional '-', nothing else: std::stoll also took " 5", "+5" and "5abc"
+  // cut short by the caller; from_chars takes no space, no '+', no "0x".
+  std::int64_t x = 0;
+  const auto* end = v.data() + v.size();
+  const auto [p, ec] = std::from_chars(v.data(), end, x, 10);
+  if (v.empty() || ec != std::errc() || p != end || x < lo || x > hi) return std::nullopt;
+  return x;
+}
+
+std::optional<double> strict_double(std::string_view v) {
+  // A plain decimal (or exponent) number: from_chars takes no space and no '+'; "inf", "nan" and
+  // hexadecimal ("0x1p3", which it reads as 0 then stops) are refused below.
+  double x = 0;
+  const auto* end = v.data() + v.size();
+  const auto [p, ec] = std::from_chars(v.data(), end, x, std::chars_format::general);
+  if (v.empty() || ec != std::errc() || p != end || !std::isfinite(x)) return std::nullopt;
+  return x;
 }
 
 bool int_param(const httplib::Request& req, httplib::Response& res, const char* name, std::int64_t lo,
                std::int64_t hi, std::optional<std::int64_t>& out) {
   if (!req.has_param(name)) return true;
   const std::string v = req.get_param_value(name);
-  std::size_t used = 0;
-  long long x = 0;
-  try {
-    x = std::stoll(v, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (v.empty() || used != v.size() || x < lo || x > hi) {
+  out = strict_int(v, lo, hi);
+  if (!out || req.get_param_value_count(name) > 1) {
     send_error(res, 400, "bad_parameter",
-               std::string(name) + " must be an integer in " + std::to_string(lo) + ".." +
-                   std::to_string(hi) + ", got \"" + v + "\"");
+               std::string(name) + " must be a decimal integer in " + std::to_string(lo) + ".." +
+                   std::to_string(hi) + ", given once, got \"" + v + "\"");
     return false;
   }
-  out = x;
   return true;
 }
 
@@ -89,18 +110,12 @@ bool double_param(const httplib::Request& req, httplib::Response& res, const cha
                   std::optional<double>& out) {
   if (!req.has_param(name)) return true;
   const std::string v = req.get_param_value(name);
-  std::size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(v, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (v.empty() || used != v.size() || !std::isfinite(x)) {
-    send_error(res, 400, "bad_parameter", std::string(name) + " must be a finite number, got \"" + v + "\"");
+  out = strict_double(v);
+  if (!out || req.get_param_value_count(name) > 1) {
+    send_error(res, 400, "bad_parameter",
+               std::string(name) + " must be a finite decimal number, given once, got \"" + v + "\"");
     return false;
   }
-  out = x;
   return true;
 }
 
@@ -187,50 +202,35 @@ namespace {
 constexpr int kHttpNice = 5;
 
 void lower_this_thread_priority() {
-  thread_local const bool done = [] {
-    // Linux: PRIO_PROCESS with a thread id sets that thread's nice value alone.
-    setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kHttpNice);
-    return true;
-  }();
-  (void)done;
+  // Linux: PRIO_PROCESS with a thread id sets that thread's nice value alone.
+  setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kHttpNice);
 }
-
-// httplib's pool, with each worker thread lowered on its first task.
-class LowPriorityPool final : public httplib::TaskQueue {
- public:
-  explicit LowPriorityPool(std::size_t n) : pool_(n) {}
-  void enqueue(std::function<void()> fn) override {
-    pool_.enqueue([fn = std::move(fn)] {
-      lower_this_thread_priority();
-      fn();
-    });
-  }
-  void shutdown() override { pool_.shutdown(); }
-
- private:
-  httplib::ThreadPool pool_;
-};
 
 }  // namespace
 
 }  // namespace http
 
 HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string version)
-    : ctx_(std::make_unique<HttpContext>()), server_(std::make_unique<httplib::Server>()) {
+    : ctx_(std::make_unique<HttpContext>()) {
   ctx_->settings = settings;
   ctx_->pipeline = &pipeline;
   ctx_->version = std::move(version);
-  const auto threads = static_cast<std::size_t>(settings.http_threads);
-  server_->new_task_queue = [threads] { return new http::LowPriorityPool(threads); };
-  // Short idle keep-alive so that shutdown is not held by an idle client for long.
-  server_->set_keep_alive_timeout(1);
+  http::GateLimits limits;
+  limits.max_connections = settings.http_max_connections;
+  limits.head_timeout = std::chrono::milliseconds(settings.http_head_timeout_ms);
+  limits.idle_timeout = std::chrono::milliseconds(settings.http_idle_timeout_ms);
+  limits.threads = settings.http_threads;
+  limits.nice = http::kHttpNice;
   // httplib closes a keep-alive connection after 5 requests by default: a client polling /v1/depth
-  // then pays a TCP handshake, an accept and a hand-over to the pool every 5 requests (that halved
-  // the request rate). Each connection holds a pool thread while open, so the count stays finite:
-  // under full load a waiting connection gets a thread within ~100 requests of another one.
-  server_->set_keep_alive_max_count(100);
-  // Headers and body go out in separate writes: without TCP_NODELAY, Nagle waits for the client's
-  // delayed ACK (tens of ms) before sending the body.
+  // then pays a TCP handshake, an accept and a hand-over every 5 requests (that halved the request
+  // rate). An idle connection costs no thread (it waits in the gate), so 100 only bounds how long
+  // one connection keeps its place.
+  limits.keep_alive_max = 100;
+  server_ = http::make_gated_server(limits, ctx_->connections, gate_);
+  // Only for the Keep-Alive header httplib writes: the gate enforces both.
+  server_->set_keep_alive_timeout(std::max<time_t>(1, settings.http_idle_timeout_ms / 1000));
+  server_->set_keep_alive_max_count(static_cast<std::size_t>(limits.keep_alive_max));
+  server_->set_payload_max_length(limits.max_body);
   server_->set_tcp_nodelay(true);
   // httplib listens with a backlog of 5 (compiled into Debian's library): when more connections
   // arrive at once while the accept thread waits for a core, the kernel drops their SYNs and each
@@ -239,8 +239,6 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
     httplib::default_socket_options(sock);
     listen_fd_ = sock;
   });
-  server_->set_read_timeout(5, 0);
-  server_->set_write_timeout(2, 0);
   // Counted before the handler runs, so that a client that got its answer also sees it counted.
   server_->set_pre_routing_handler([ctx = ctx_.get()](const httplib::Request& req, httplib::Response& res) {
     ctx->requests.fetch_add(1, std::memory_order_relaxed);
@@ -306,6 +304,7 @@ int HttpServer::bind() {
 }
 
 void HttpServer::start() {
+  gate_->start();
   thread_ = std::thread([this] {
     http::lower_this_thread_priority();  // the accept loop
     server_->listen_after_bind();
@@ -320,6 +319,8 @@ bool HttpServer::stop(std::chrono::milliseconds grace) {
   while (thread_.joinable() && !finished_.load() && std::chrono::steady_clock::now() < until) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
+  // Every connection is closed here, in-flight ones shut down first: nothing is left to wait for.
+  if (gate_) gate_->stop();
   return !thread_.joinable() || finished_.load();
 }
 

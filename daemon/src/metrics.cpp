@@ -41,12 +41,28 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   });
   counter(os, "naneye_source_opens_total", "Times the source was opened.", s.source_opens);
   counter(os, "naneye_calibration_reloads_total", "Calibration reloads (SIGHUP).", s.calibration_reloads);
+  counter(os, "naneye_calibration_reload_failures_total",
+          "Calibration reloads refused (the previous calibration stayed).", s.calibration_reload_failures);
+  gauge(os, "naneye_calibration_last_reload_ok",
+        "1: the latest reload was applied, 0: it was refused, -1: no reload yet.",
+        s.last_reload ? (s.last_reload->ok ? 1.0 : 0.0) : -1.0);
   counter(os, "naneye_events_sent_total", "Server-sent events written to clients.", ctx.sse_events.load());
   counter(os, "naneye_events_clients_dropped_total", "Event-stream clients dropped for falling behind.",
           ctx.sse_dropped.load());
   gauge(os, "naneye_events_clients", "Open event-stream clients.", ctx.sse_clients.load());
   counter(os, "naneye_http_requests_total", "HTTP requests received (any path and status).",
           ctx.requests.load());
+  const auto& h = ctx.connections;
+  gauge(os, "naneye_http_connections", "Client connections open.", h.connections.load());
+  gauge(os, "naneye_http_connection_cap", "Client connections kept open at most.", h.connection_cap);
+  counter(os, "naneye_http_refused_total", "Connections answered 503 at the connection limit.",
+          h.refused.load());
+  counter(os, "naneye_http_idle_evicted_total", "Idle keep-alive connections closed to admit another.",
+          h.idle_evicted.load());
+  counter(os, "naneye_http_head_timeouts_total", "Requests not received within http.head_timeout_ms (408).",
+          h.head_timeouts.load());
+  counter(os, "naneye_http_oversize_total", "Requests refused for their size or framing (411/413/414/431).",
+          h.oversize.load());
   counter(os, "naneye_depth_served_total", "Results served by /v1/depth (status 200).",
           ctx.depth_served.load());
   gauge(os, "naneye_sensor_fps_left", "Frame rate of the left sensor (its own clock).", s.fps_left);

@@ -12,11 +12,14 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "naneye/daemon/config_check.hpp"
 #include "naneye/daemon/http_server.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/processor.hpp"
+#include "naneye/daemon/rig_check.hpp"
 #include "naneye/daemon/settings.hpp"
 #include "naneye/daemon/source_select.hpp"
+#include "naneye/driver/wire_format.hpp"
 #include "naneye/recon/calibration_io.hpp"
 
 namespace {
@@ -67,11 +70,23 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
     }
     if (sig == SIGHUP) {
       sd_notify(0, "RELOADING=1");
+      std::string why;
       try {
-        pipeline.reload_rig(std::make_shared<const recon::StereoRig>(recon::load_rig(settings.calibration)));
+        auto rig = std::make_shared<const recon::StereoRig>(recon::load_rig(settings.calibration));
+        if (auto problem = daemon::rig_problem(*rig, driver::kSensorSize)) {
+          why = *problem;
+        } else {
+          // The new maps are built here, not on the worker: it only swaps the processor in.
+          auto prepared = daemon::make_processor(settings);
+          prepared->set_rig(*rig);
+          pipeline.reload(std::move(rig), std::move(prepared));
+        }
       } catch (const std::exception& e) {
-        spdlog::get("daemon")->error("SIGHUP: calibration not reloaded, keeping the current one: {}",
-                                     e.what());
+        why = e.what();
+      }
+      if (!why.empty()) {
+        spdlog::get("daemon")->error("SIGHUP: calibration not reloaded, keeping the current one: {}", why);
+        pipeline.reload_refused(why);
       }
       sd_notify(0, "READY=1");
     }
@@ -111,11 +126,17 @@ int main(int argc, char** argv) {
   try {
     settings = load(f);
     rig = std::make_shared<const recon::StereoRig>(recon::load_rig(settings.calibration));
+    if (auto problem = daemon::rig_problem(*rig, driver::kSensorSize)) {
+      throw std::runtime_error("calibration cannot be used: " + *problem);
+    }
   } catch (const std::exception& e) {
     std::cerr << "naneyed: error: " << e.what() << "\n";
     return 1;
   }
   if (f.check) {
+    const auto problems = daemon::check_config(settings, daemon::make_source_registry());
+    for (const auto& p : problems) std::cerr << "naneyed: error: " << p << "\n";
+    if (!problems.empty()) return 1;
     std::cout << "naneyed: configuration OK (source " << settings.source_uri << ", listen "
               << settings.http_host << ":" << settings.http_port << ", baseline " << rig->baseline_mm()
               << " mm)\n";

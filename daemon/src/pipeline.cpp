@@ -48,6 +48,8 @@ Pipeline::Pipeline(const Settings& settings, std::unique_ptr<PairProcessor> proc
       // A PNG encode pins a frame slot for a few ms; four slots keep the worker from ever skipping.
       frames_(4) {
   processor_->set_rig(*rig_);
+  rig_applied_ = rig_;
+  processor_name_ = std::string(processor_->name());
 }
 
 Pipeline::~Pipeline() {
@@ -105,6 +107,22 @@ void Pipeline::reload_rig(std::shared_ptr<const recon::StereoRig> rig) {
   rig_pending_.store(true);
 }
 
+void Pipeline::reload(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared) {
+  {
+    std::lock_guard lock(rig_mu_);
+    rig_ = std::move(rig);
+    prepared_ = std::move(prepared);  // an earlier one not yet taken is replaced: the newest wins
+  }
+  rig_pending_.store(true);
+}
+
+void Pipeline::reload_refused(std::string reason) {
+  reload_failures_.fetch_add(1);
+  const double at = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  std::lock_guard lock(reload_mu_);
+  last_reload_ = PipelineStatus::Reload{false, std::move(reason), at};
+}
+
 std::shared_ptr<const recon::StereoRig> Pipeline::rig() const {
   std::lock_guard lock(rig_mu_);
   return rig_;
@@ -121,9 +139,40 @@ void Pipeline::run() {
   while (!stop_.load()) {
     heartbeat_.fetch_add(1, std::memory_order_relaxed);
     if (rig_pending_.exchange(false)) {
-      processor_->set_rig(*rig());
-      reloads_.fetch_add(1);
-      log()->info("calibration reloaded; the stream goes on");
+      std::shared_ptr<const recon::StereoRig> next;
+      std::unique_ptr<PairProcessor> prepared;
+      {
+        std::lock_guard lock(rig_mu_);
+        next = rig_;
+        prepared = std::move(prepared_);
+      }
+      try {
+        if (prepared && prepared->name() == processor_name_) {
+          processor_.swap(prepared);  // the previous one is freed when `prepared` goes
+        } else {
+          processor_->set_rig(*next);
+        }
+        rig_applied_ = next;
+        reloads_.fetch_add(1);
+        {
+          const double at =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+          std::lock_guard lock(reload_mu_);
+          last_reload_ = PipelineStatus::Reload{true, "applied", at};
+        }
+        log()->info("calibration reloaded; the stream goes on");
+      } catch (const std::exception& e) {
+        // The last line behind rig_check: the worker must outlive any calibration it is given.
+        // The processor is given its previous rig back, and HTTP readers see that one again.
+        log()->error("calibration reload failed in the processing step, keeping the previous one: {}",
+                     e.what());
+        if (rig_applied_) {
+          processor_->set_rig(*rig_applied_);
+          std::lock_guard lock(rig_mu_);
+          rig_ = rig_applied_;
+        }
+        reload_refused(std::string("the processing step refused it: ") + e.what());
+      }
     }
     driver::FrameSource* src = source_.get();  // only this thread replaces source_
     if (!src) {
@@ -230,12 +279,17 @@ void Pipeline::handle(driver::PairPtr pair) {
 PipelineStatus Pipeline::status() const {
   PipelineStatus s;
   s.choice = choice_;
-  s.processor = std::string(processor_->name());
+  s.processor = processor_name_;
   s.pairs_processed = processed_.load(std::memory_order_relaxed);
   s.publish_skipped = skipped_.load(std::memory_order_relaxed);
   s.source_opens = opens_.load();
   s.source_open_failures = open_failures_.load();
   s.calibration_reloads = reloads_.load();
+  s.calibration_reload_failures = reload_failures_.load();
+  {
+    std::lock_guard lock(reload_mu_);
+    s.last_reload = last_reload_;
+  }
   s.fps_left = fps_left_.load(std::memory_order_relaxed);
   s.fps_right = fps_right_.load(std::memory_order_relaxed);
   s.offset_ns = offset_ns_.load(std::memory_order_relaxed);

@@ -2,6 +2,9 @@
 
 #include <zlib.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -44,8 +47,14 @@ std::uint32_t crc(std::span<const std::uint8_t> b, std::uint32_t start = 0) {
 
 NeydWriter::NeydWriter(const std::string& path, const NeydHeader& h) : path_(path) {
   if (h.note.size() > kNeydMaxNote) throw SourceError(path + ": .neyd note longer than 1 MiB");
-  file_ = std::fopen(path.c_str(), "wb");
-  if (!file_) throw SourceError(path + ": cannot create: " + std::strerror(errno));
+  // 0640: a capture shows what the camera saw; the owner and its group (naneye) read it, others not.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
+  if (fd < 0) throw SourceError(path + ": cannot create: " + std::strerror(errno));
+  file_ = ::fdopen(fd, "wb");
+  if (!file_) {
+    ::close(fd);
+    throw SourceError(path + ": cannot create: " + std::strerror(errno));
+  }
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
   std::vector<std::uint8_t> b(kFixedHeader + h.note.size() + 4);
   std::memcpy(b.data(), kMagic.data(), kMagic.size());
@@ -66,36 +75,84 @@ NeydWriter::~NeydWriter() {
   if (file_) std::fclose(file_);
 }
 
+void NeydWriter::fail(int err) {
+  // The first error is the one to report; later ones follow from it. (The capture thread writes,
+  // the recorder's thread flushes: either may fail first.)
+  std::lock_guard lock(error_mu_);
+  if (failed_.load(std::memory_order_acquire)) return;
+  error_ = path_ + ": write failed: " + std::strerror(err);
+  failed_.store(true, std::memory_order_release);
+}
+
 void NeydWriter::put(const void* data, std::size_t n) {
-  if (n && std::fwrite(data, 1, n, file_) != n) failed_ = true;
+  if (n && !failed_.load(std::memory_order_acquire) && std::fwrite(data, 1, n, file_) != n) fail(errno);
 }
 
 void NeydWriter::write_chunk(std::span<const std::uint8_t> bytes, std::int64_t host_ns) {
   if (!file_) throw SourceError(path_ + ": write after close");
+  // After a failure nothing more is written: the file ends at the last chunk that was (at most one
+  // chunk is cut, and a reader replays every chunk before it).
+  if (failed_.load(std::memory_order_acquire)) return;
   std::uint8_t h[kChunkHeader];
   put_le<std::uint32_t>(h, kChunkTag);
   put_le<std::uint32_t>(h + 4, static_cast<std::uint32_t>(bytes.size()));
   put_le<std::int64_t>(h + 8, host_ns);
   put_le<std::uint32_t>(h + 16, crc(bytes));
+  // One locked write: a flush() from another thread never lands between a chunk's header and its
+  // bytes, so what reaches the disk always ends at a chunk boundary.
+  flockfile(file_);
   put(h, sizeof h);
   put(bytes.data(), bytes.size());
-  ++chunks_;
-  bytes_ += bytes.size();
+  if (!failed_.load(std::memory_order_acquire)) {
+    ++chunks_;
+    bytes_ += bytes.size();
+  }
+  funlockfile(file_);
+}
+
+void NeydWriter::flush() {
+  if (!file_ || failed_.load(std::memory_order_acquire)) return;
+  flockfile(file_);
+  if (std::fflush(file_) != 0) {
+    fail(errno);
+  } else {
+    flushed_chunks_ = chunks_;
+    flushed_bytes_ = bytes_;
+  }
+  funlockfile(file_);
+}
+
+std::uint64_t NeydWriter::chunks() const {
+  // After a failure only what a flush saw through is sure to be in the file.
+  return failed_.load(std::memory_order_acquire) ? flushed_chunks_ : chunks_;
+}
+
+std::uint64_t NeydWriter::payload_bytes() const {
+  return failed_.load(std::memory_order_acquire) ? flushed_bytes_ : bytes_;
+}
+
+std::optional<std::string> NeydWriter::error() const {
+  std::lock_guard lock(error_mu_);
+  if (!failed_.load(std::memory_order_acquire)) return std::nullopt;
+  return error_;
 }
 
 void NeydWriter::close() {
   if (!file_) return;
-  std::uint8_t e[kEndSize];
-  put_le<std::uint32_t>(e, kEndTag);
-  put_le<std::uint32_t>(e + 4, 0);
-  put_le<std::uint64_t>(e + 8, chunks_);
-  put_le<std::uint64_t>(e + 16, bytes_);
-  put(e, sizeof e);
-  const bool flush_failed = std::fflush(file_) != 0;
-  const bool close_failed = std::fclose(file_) != 0;
+  // No end marker after a failure: the file then reads as truncated after its last whole chunk,
+  // which is what it is.
+  if (!failed_.load(std::memory_order_acquire)) {
+    std::uint8_t e[kEndSize];
+    put_le<std::uint32_t>(e, kEndTag);
+    put_le<std::uint32_t>(e + 4, 0);
+    put_le<std::uint64_t>(e + 8, chunks_);
+    put_le<std::uint64_t>(e + 16, bytes_);
+    put(e, sizeof e);
+    flush();
+  }
+  if (std::fclose(file_) != 0) fail(errno);
   file_ = nullptr;
-  if (failed_ || flush_failed || close_failed)
-    throw SourceError(path_ + ": write failed: " + std::strerror(errno));
+  if (auto e = error()) throw SourceError(*e);
 }
 
 bool NeydReader::is_neyd(const std::string& path) {

@@ -75,16 +75,27 @@ RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const
   std::vector<std::uint8_t> encoded(sum.raw ? 0 : 2 * kRecordSize);
 
   source.start();
+  // Data reaches the kernel at least every kFlushEvery: a SIGKILL (or a crash) loses at most that
+  // much: the loop below flushes once kFlushEvery / 2 has passed and waits at most kFlushEvery / 4.
+  constexpr auto kFlushEvery = std::chrono::milliseconds(100);
+  auto last_flush = std::chrono::steady_clock::now();
   const auto deadline = limits.seconds
                             ? std::chrono::steady_clock::now() +
                                   std::chrono::nanoseconds(static_cast<std::int64_t>(*limits.seconds * 1e9))
                             : std::chrono::steady_clock::time_point::max();
   while (!(limits.pairs && sum.pairs >= *limits.pairs)) {
     if (interrupt && interrupt->load()) break;
-    const auto now = std::chrono::steady_clock::now();
+    auto now = std::chrono::steady_clock::now();
+    if (now - last_flush >= kFlushEvery / 2) {
+      writer.flush();
+      last_flush = now;
+    }
+    // A failed write (a full disk, a quota, an I/O error) ends the recording at once: the file
+    // holds every whole chunk written before it.
+    if (writer.error()) break;
+    now = std::chrono::steady_clock::now();
     if (now >= deadline) break;
-    const auto wait =
-        std::min<std::chrono::steady_clock::duration>(deadline - now, std::chrono::milliseconds(100));
+    const auto wait = std::min<std::chrono::steady_clock::duration>(deadline - now, kFlushEvery / 4);
     PairPtr p = source.next(std::chrono::duration_cast<std::chrono::milliseconds>(wait) +
                             std::chrono::milliseconds(1));
     if (!p) {
@@ -104,7 +115,11 @@ RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const
   }
   source.stop();
   source.set_raw_tap(nullptr);
-  writer.close();
+  try {
+    writer.close();
+  } catch (const SourceError& e) {
+    sum.write_error = e.what();
+  }
   sum.chunks = writer.chunks();
   sum.bytes = writer.payload_bytes();
   sum.end_state = source.state();

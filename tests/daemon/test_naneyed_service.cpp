@@ -26,8 +26,10 @@ std::vector<Event> read_events(httplib::Client& client, const std::string& path,
     std::size_t end;
     while ((end = buffer.find("\n\n")) != std::string::npos) {
       Event e{"message", "", nullptr};
+      const bool comment = buffer[0] == ':';  // a keep-alive line, not an event (SSE spec 9.2.6)
       std::istringstream lines(buffer.substr(0, end));
       buffer.erase(0, end + 2);
+      if (comment) continue;
       for (std::string line; std::getline(lines, line);) {
         if (line.rfind("event: ", 0) == 0) e.type = line.substr(7);
         if (line.rfind("id: ", 0) == 0) e.id = line.substr(4);
@@ -138,11 +140,40 @@ TEST_F(NaneyedTest, SighupReloadsTheCalibrationWithoutDroppingTheStream) {
 TEST_F(NaneyedTest, CheckConfigValidatesAndFlagsOverride) {
   const auto good = dir.path / "good.toml";
   std::ofstream(good) << "[calibration]\npath = \"" << calib_path() << "\"\n[http]\nport = 8088\n";
+  const auto file = capture(4);
   DaemonProcess ok({"--config", good.string(), "--check-config", "--listen", "127.0.0.1:9999", "--source",
-                    "file:///x.raw"},
+                    "file://" + file.string()},
                    dir.path / "ok.log");
   EXPECT_EQ(ok.wait_exit(), 0) << ok.log();
-  EXPECT_NE(ok.out().find("source file:///x.raw, listen 127.0.0.1:9999"), std::string::npos) << ok.out();
+  EXPECT_NE(ok.out().find("source file://" + file.string() + ", listen 127.0.0.1:9999"), std::string::npos)
+      << ok.out();
+
+  // What can never run is refused without opening anything: a scheme nobody serves, a capture
+  // that is not there, one that is empty, one of random bytes.
+  const auto empty = dir.path / "empty.raw";
+  std::ofstream(empty).flush();
+  const auto noise = dir.path / "noise.raw";
+  {
+    std::ofstream out(noise, std::ios::binary);
+    std::uint32_t x = 12345;
+    for (int i = 0; i < 600'000; ++i) {
+      x = x * 1664525u + 1013904223u;  // Numerical Recipes' LCG: bytes with no record structure
+      out.put(static_cast<char>(x >> 24));
+    }
+  }
+  struct Refusal {
+    std::string source, says;
+  };
+  for (const Refusal& r : {Refusal{"ftp://host/x.raw", "unknown scheme \"ftp\""},
+                           Refusal{"file:///nonexistent/x.raw", "no such file: /nonexistent/x.raw"},
+                           Refusal{"file://" + empty.string(), "holds no complete stereo pair (0 bytes"},
+                           Refusal{"file://" + noise.string(), "holds no complete stereo pair (600000 bytes"},
+                           Refusal{"v4l2:///nonexistent/video9", "is not a character device"}}) {
+    DaemonProcess refused({"--config", good.string(), "--check-config", "--source", r.source},
+                          dir.path / "refused.log");
+    EXPECT_EQ(refused.wait_exit(), 1) << r.source << "\n" << refused.log();
+    EXPECT_NE(refused.log().find(r.says), std::string::npos) << r.source << "\n" << refused.log();
+  }
 
   const auto bad = dir.path / "bad.toml";
   std::ofstream(bad) << "[calibration]\npath = \"" << calib_path() << "\"\n[pipeline]\nhistroy = 3\n";

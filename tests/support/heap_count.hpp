@@ -1,11 +1,14 @@
-// Heap allocations of the whole test process, counted by the replaced global operator new in
-// heap_count.cpp (linked into the test binaries that check "no allocation per frame"). Tests take
-// the difference around the code under test.
+// Heap allocations of the whole test process, counted by the replaced global operator new and C
+// allocator in heap_count.cpp (linked into the test binaries that check "no allocation per
+// frame"). Tests take the difference around the code under test.
 #pragma once
 
 namespace naneye::test {
 
-// Every operator new (plain, array, aligned) since the process started, all threads.
+// Every operator new (plain, array, aligned) and, when heap_counts_malloc(), every malloc, calloc,
+// realloc, memalign, aligned_alloc and posix_memalign since the process started, all threads.
 long heap_allocations();
+// False in the sanitizer builds, where the C allocator belongs to the sanitizer (operator new only).
+bool heap_counts_malloc();
 
 }  // namespace naneye::test

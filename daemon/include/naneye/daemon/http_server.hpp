@@ -16,6 +16,19 @@ class Server;
 }
 
 namespace naneye::daemon {
+namespace http {
+class Gate;
+}
+
+// The connection gate's figures (daemon/src/http_gate.hpp), read by /v1/status and /metrics.
+struct HttpCounters {
+  std::atomic<int> connections{0};              // client connections open now
+  int connection_cap = 0;                       // the most it keeps open (http.max_connections, fd limit)
+  std::atomic<std::uint64_t> refused{0};        // answered 503 at the connection limit
+  std::atomic<std::uint64_t> idle_evicted{0};   // idle keep-alive connections closed for a newcomer
+  std::atomic<std::uint64_t> head_timeouts{0};  // 408: request not received within http.head_timeout_ms
+  std::atomic<std::uint64_t> oversize{0};       // 411/413/414/431/400 on the request's framing
+};
 
 // Shared by the handlers; counters are read by /v1/status and /metrics.
 struct HttpContext {
@@ -28,6 +41,7 @@ struct HttpContext {
   std::atomic<std::uint64_t> requests{0};      // every request routed, any path or status
   std::atomic<std::uint64_t> depth_served{0};  // /v1/depth answered 200
   std::atomic<bool> stopping{false};
+  HttpCounters connections;
   // The JSON text of the latest result served, built once for all HTTP threads (/v1/depth and
   // /v1/events); only HTTP threads take the mutex, never the pipeline.
   std::mutex result_json_mutex;
@@ -44,7 +58,8 @@ class HttpServer {
 
   // Binds settings.http_host:http_port (0: ephemeral) and returns the port; throws on failure.
   int bind();
-  // Serves on its own thread (plus httplib's pool of settings.http_threads).
+  // Serves on its own thread (the accept loop), a poll thread reading request heads and a pool of
+  // settings.http_threads running handlers (daemon/src/http_gate.hpp).
   void start();
   // Closes the listening socket and ends event streams; waits up to `grace` for the server's
   // threads. False when connections were still open after it (the caller may exit anyway).
@@ -55,6 +70,7 @@ class HttpServer {
  private:
   std::unique_ptr<HttpContext> ctx_;
   std::unique_ptr<httplib::Server> server_;
+  http::Gate* gate_ = nullptr;  // owned by server_
   std::thread thread_;
   std::atomic<bool> finished_{false};
   int listen_fd_ = -1;  // the listening socket httplib created, to widen its backlog

@@ -66,6 +66,15 @@ struct PipelineStatus {
   std::uint64_t publish_skipped = 0;  // every slot pinned by readers: result computed, not published
   std::uint64_t source_opens = 0, source_open_failures = 0;
   std::uint64_t calibration_reloads = 0;
+  std::uint64_t calibration_reload_failures = 0;
+  // The outcome of the latest reload request (SIGHUP), if any: the calibration in use is the old
+  // one whenever it failed.
+  struct Reload {
+    bool ok = false;
+    std::string reason;      // "applied", or why the new calibration was refused
+    double at_uptime_s = 0;  // when it was decided
+  };
+  std::optional<Reload> last_reload;
   double fps_left = 0, fps_right = 0;
   std::int64_t offset_ns = 0;
   std::optional<double> last_result_age_ms;
@@ -89,6 +98,13 @@ class Pipeline {
 
   // From any thread: the worker switches to `rig` between two pairs; HTTP readers see it at once.
   void reload_rig(std::shared_ptr<const recon::StereoRig> rig);
+  // The same with a processor already set to `rig` on the caller's thread (make_processor, then
+  // set_rig): the worker only swaps it in between two pairs, so building the new maps never delays
+  // a pair (a SIGHUP storm made a live source drop pairs while the worker rebuilt them).
+  void reload(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared);
+  // Records a reload that was refused before reaching the pipeline (unreadable, or not valid for
+  // the sensor: rig_check.hpp); the rig in use stays.
+  void reload_refused(std::string reason);
   std::shared_ptr<const recon::StereoRig> rig() const;
 
   const PinnedSlots<Published>& results() const { return results_; }
@@ -117,6 +133,12 @@ class Pipeline {
   mutable std::mutex rig_mu_;  // HTTP readers and reloads only; the worker takes it once per reload
   std::shared_ptr<const recon::StereoRig> rig_;
   std::atomic<bool> rig_pending_{false};
+  std::unique_ptr<PairProcessor> prepared_;  // guarded by rig_mu_: reload()'s, for the worker to take
+  std::shared_ptr<const recon::StereoRig> rig_applied_;  // worker only: the rig the processor has
+  std::string processor_name_;                           // fixed: every processor comes from the settings
+  mutable std::mutex reload_mu_;                         // guards last_reload_ (a reload's outcome, rare)
+  std::optional<PipelineStatus::Reload> last_reload_;
+  std::atomic<std::uint64_t> reload_failures_{0};
 
   PinnedSlots<Published> results_;
   PinnedSlots<FrameSnapshot> frames_;

@@ -19,7 +19,12 @@ struct Settings {
   // [http]
   std::string http_host = "127.0.0.1";
   int http_port = 8080;  // 0: an ephemeral port, logged once bound
-  int http_threads = 8;  // HTTP server threads; each open connection or /v1/events stream holds one
+  int http_threads = 8;  // threads running requests; each /v1/events stream holds one while open
+  // Open client connections kept at most (lowered to fit the descriptor limit); past it the oldest
+  // idle keep-alive connection is closed for a newcomer, or the newcomer gets 503.
+  int http_max_connections = 512;
+  int http_head_timeout_ms = 2000;  // a request's head and body must arrive within this (else 408)
+  int http_idle_timeout_ms = 5000;  // an idle keep-alive connection is closed after this
   // [pipeline]
   double corner_sigma_px = 0.05;        // corner noise used for the depth sigmas
   int max_result_age_ms = 500;          // /readyz fails when the latest result is older

@@ -2,10 +2,13 @@
 // .neyd, the project's capture container (docs/dump-format.md): a versioned header, then one chunk
 // per USB transfer (host CLOCK_MONOTONIC arrival time, length, CRC32 of the bytes, the bytes exactly
 // as received), then an end marker. Replay feeds the chunks to the very parser live capture runs.
+#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <istream>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -46,18 +49,29 @@ class NeydWriter {
   NeydWriter(const NeydWriter&) = delete;
   NeydWriter& operator=(const NeydWriter&) = delete;
 
+  // Buffered; safe against flush() from another thread. Does nothing once a write has failed.
   void write_chunk(std::span<const std::uint8_t> bytes, std::int64_t host_ns);
-  // Writes the end marker and flushes; throws SourceError on an I/O error.
+  // Hands what is buffered to the kernel (whole chunks only); a failure is kept in error().
+  void flush();
+  // The first write error ("PATH: write failed: No space left on device"), if any.
+  std::optional<std::string> error() const;
+  // Writes the end marker (unless a write failed) and closes; throws SourceError on an I/O error.
   void close();
-  std::uint64_t chunks() const { return chunks_; }
-  std::uint64_t payload_bytes() const { return bytes_; }
+  // Chunks and payload bytes written; after a write error, those known to be in the file (as of
+  // the last successful flush).
+  std::uint64_t chunks() const;
+  std::uint64_t payload_bytes() const;
 
  private:
   void put(const void* data, std::size_t n);
+  void fail(int err);
   std::FILE* file_ = nullptr;
   std::string path_;
   std::uint64_t chunks_ = 0, bytes_ = 0;
-  bool failed_ = false;
+  std::uint64_t flushed_chunks_ = 0, flushed_bytes_ = 0;  // as of the last successful flush()
+  std::atomic<bool> failed_{false};
+  mutable std::mutex error_mu_;
+  std::string error_;  // the first failure, written once under error_mu_
 };
 
 class NeydReader {

@@ -24,10 +24,15 @@ struct RecordSummary {
   SourceState end_state = SourceState::stopped;
   SourceCounters counters;
   std::optional<std::string> error;  // the source's error(), if it ended failed
+  // The file's first write error (ENOSPC, EFBIG, EIO...): the recording stopped there, and the
+  // file holds every whole chunk before it (it reads as truncated: no end marker).
+  std::optional<std::string> write_error;
 };
 
-// Starts `source` (not yet started), records until a limit, the source's end, or `interrupt`,
-// stops it and closes the file. Throws SourceError if the file or the source cannot be opened.
+// Starts `source` (not yet started), records until a limit, the source's end, `interrupt` or a
+// write error, stops it and closes the file; buffered data is flushed at least every 100 ms.
+// Throws SourceError if the file or the source cannot be opened; a later write error is in the
+// summary (write_error). The file is created 0640.
 RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const RecordLimits& limits,
                              const std::atomic<bool>* interrupt = nullptr);
 
