@@ -16,6 +16,8 @@
 #include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/scene/sparse.hpp"
+#include "scene_json.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -29,7 +31,24 @@ struct ReconOptions {
   double corner_sigma_px = 0.05;
   bool no_tracking = false;
   long long max_pairs = -1;
+  bool scene = false;
 };
+
+recon::RawImageView frame_view(const driver::Frame& f) {
+  recon::RawImageView v;
+  v.data = f.pixels.data();
+  v.layout =
+      f.color == driver::ColorMode::bayer_grbg ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
+  return v;
+}
+
+void print_scene_line(const recon::scene::SparseResult& s) {
+  double sigma = 0;
+  for (const auto& p : s.points)
+    if (p.valid()) sigma += p.depth_sigma_mm;
+  std::printf("        scene: %d/%zu points valid, mean depth sigma %.3f mm\n", s.valid_count,
+              s.points.size(), s.valid_count ? sigma / s.valid_count : NAN);
+}
 
 void print_line(const recon::PairResult& r) {
   if (!r.board_found) {
@@ -65,6 +84,9 @@ void run_recon(const ReconOptions& o) {
   auto source = daemon::make_source_registry().open(lossless_input_uri(o.input));
   source->start();
   auto result = std::make_unique<recon::PairResult>();
+  std::unique_ptr<recon::scene::SparseReconstructor> scene;
+  if (o.scene) scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
+  recon::scene::SparseResult scene_result;
   long long pairs = 0, found = 0;
   while (o.max_pairs < 0 || pairs < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
@@ -73,12 +95,17 @@ void run_recon(const ReconOptions& o) {
       continue;
     }
     processor->process(*pair, *result);
+    if (scene) scene->reconstruct(frame_view(pair->left), frame_view(pair->right), scene_result);
     ++pairs;
     found += result->board_found;
-    if (o.json)
-      std::cout << daemon::result_to_json(*result).dump() << "\n";
-    else
+    if (o.json) {
+      nlohmann::json j = daemon::result_to_json(*result);
+      if (scene) j["scene"] = scene_to_json(scene_result);
+      std::cout << j.dump() << "\n";
+    } else {
       print_line(*result);
+      if (scene) print_scene_line(scene_result);
+    }
   }
   source->stop();
   std::cout.flush();
@@ -107,6 +134,9 @@ void add_recon_commands(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--no-tracking", o->no_tracking, "Full search on every pair");
   cmd->add_option("--max-pairs", o->max_pairs, "Stop after this many pairs (live sources)");
+  cmd->add_flag("--scene", o->scene,
+                "Also reconstruct whatever textured scene is in view: sparse points with depth sigmas "
+                "(docs/scene.md); the JSON gains a \"scene\" object");
   cmd->callback([o] { run_recon(*o); });
 }
 

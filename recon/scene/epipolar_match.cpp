@@ -34,8 +34,41 @@ void sample_epipolar_curve(const CameraModel& other, const Eigen::Matrix3d& R, c
   }
 }
 
+void window_inverse_norms(const GrayView& img, int radius, const std::uint8_t* usable, float* out,
+                          double* integral) {
+  const int w = img.width, h = img.height, W = w + 1;
+  double* s1 = integral;
+  double* s2 = integral + static_cast<std::size_t>(W) * (h + 1);
+  for (int c = 0; c < W; ++c) s1[c] = s2[c] = 0;
+  for (int r = 0; r < h; ++r) {
+    double a = 0, b = 0;
+    s1[(r + 1) * W] = s2[(r + 1) * W] = 0;
+    for (int c = 0; c < w; ++c) {
+      const double v = img.at(c, r);
+      a += v;
+      b += v * v;
+      s1[(r + 1) * W + c + 1] = s1[r * W + c + 1] + a;
+      s2[(r + 1) * W + c + 1] = s2[r * W + c + 1] + b;
+    }
+  }
+  const double n = (2.0 * radius + 1) * (2.0 * radius + 1);
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) {
+      float& o = out[r * w + c];
+      o = 0;
+      if (!usable[r * w + c] || r < radius || c < radius || r + radius >= h || c + radius >= w) continue;
+      const int r0 = r - radius, r1 = r + radius + 1, c0 = c - radius, c1 = c + radius + 1;
+      const double a = s1[r1 * W + c1] - s1[r0 * W + c1] - s1[r1 * W + c0] + s1[r0 * W + c0];
+      const double b = s2[r1 * W + c1] - s2[r0 * W + c1] - s2[r1 * W + c0] + s2[r0 * W + c0];
+      const double var = b - a * a / n;
+      // Cancellation leaves ~1e-16 b of noise: a flat window (var below 1e-9 b) gets no score.
+      if (var > 1e-9 * b) o = static_cast<float>(1.0 / std::sqrt(var));
+    }
+}
+
 CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& dst,
-                             const std::uint8_t* dst_usable, const EpipolarCurve& curve, int radius) {
+                             const std::uint8_t* dst_usable, const EpipolarCurve& curve, int radius,
+                             const float* dst_inv_norm) {
   constexpr int kMaxWin = 15 * 15;
   const int side = 2 * radius + 1, n = side * side;
   CurveMatch m;
@@ -61,19 +94,29 @@ CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& 
               r = static_cast<int>(std::lround(curve.px[i].y()));
     if (c < 0 || r < 0 || c >= dst.width || r >= dst.height || !dst_usable[r * dst.width + c]) continue;
     // sum t' (I - mean_I) = sum t' I since sum t' = 0.
-    double s = 0, si = 0, sii = 0;
-    for (int dr = -radius, k = 0; dr <= radius; ++dr) {
-      const float* row = dst.data + (r + dr) * dst.width + c;
-      for (int dc = -radius; dc <= radius; ++dc, ++k) {
-        const double val = row[dc];
-        s += t[k] * val;
-        si += val;
-        sii += val * val;
+    double sdot = 0, si = 0, sii = 0;
+    if (dst_inv_norm) {
+      const float in = dst_inv_norm[r * dst.width + c];
+      if (!(in > 0)) continue;
+      for (int dr = -radius, k = 0; dr <= radius; ++dr) {
+        const float* row = dst.data + (r + dr) * dst.width + c;
+        for (int dc = -radius; dc <= radius; ++dc, ++k) sdot += t[k] * row[dc];
       }
+      score[i] = sdot * in / tnorm;
+    } else {
+      for (int dr = -radius, k = 0; dr <= radius; ++dr) {
+        const float* row = dst.data + (r + dr) * dst.width + c;
+        for (int dc = -radius; dc <= radius; ++dc, ++k) {
+          const double val = row[dc];
+          sdot += t[k] * val;
+          si += val;
+          sii += val * val;
+        }
+      }
+      const double vi = sii - si * si / n;
+      if (!(vi > 0)) continue;
+      score[i] = sdot / (tnorm * std::sqrt(vi));
     }
-    const double vi = sii - si * si / n;
-    if (!(vi > 0)) continue;
-    score[i] = s / (tnorm * std::sqrt(vi));
     if (best < 0 || score[i] > score[best]) best = i;
   }
   if (best < 0) return m;

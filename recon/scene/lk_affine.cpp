@@ -136,9 +136,10 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   const auto& b = s.noise_kernel;
   double b2 = 0;
   for (float x : b) b2 += double(x) * x;
-  Eigen::Matrix<double, 6, 6> B = Eigen::Matrix<double, 6, 6>::Zero();
+  const bool white = b == LkSettings{}.noise_kernel;
+  Eigen::Matrix<double, 6, 6> B = white ? H : Eigen::Matrix<double, 6, 6>::Zero();  // white: B = H
   // (b * SD) over the window grown by one pixel (the kernel's reach), zero outside the window.
-  for (int r = -1; r <= side; ++r)
+  for (int r = -1; !white && r <= side; ++r)
     for (int c = -1; c <= side; ++c) {
       Eigen::Matrix<double, 6, 1> f = Eigen::Matrix<double, 6, 1>::Zero();
       for (int i = -1; i <= 1; ++i)

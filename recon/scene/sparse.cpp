@@ -85,6 +85,9 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.scratch.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
   rays_.assign(2 * np, 0.0);
+  inv_norm_[0].assign(np, 0.f);
+  inv_norm_[1].assign(np, 0.f);
+  integral_.assign(2 * static_cast<std::size_t>(luma_.width + 1) * (luma_.height + 1), 0.0);
   for (int r = 0; r < luma_.height; ++r)
     for (int c = 0; c < luma_.width; ++c) {
       const Undistorted u = rig_.left.undistort(Eigen::Vector2d(c, r));
@@ -116,6 +119,9 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   const GrayView L = luma.left_view();
   out.noise_sigma_dn = estimate_noise_sigma(L, usable_search_[0].data());
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
+  window_inverse_norms(L, s_.search_radius, usable_search_[0].data(), inv_norm_[0].data(), integral_.data());
+  window_inverse_norms(luma.right_view(), s_.search_radius, usable_search_[1].data(), inv_norm_[1].data(),
+                       integral_.data());
   int id = 0;
   for (const Feature& f : features_) {
     ScenePoint p;
@@ -137,7 +143,8 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   }
   const double w_min = 1.0 / s_.z_max_mm, w_max = 1.0 / s_.z_min_mm;
   sample_epipolar_curve(rig_.right, R_lr_, T_lr_, ul.normalized, w_min, w_max, s_.search_step_px, curve_);
-  const CurveMatch m = match_along_curve(L, f.u, f.v, R, usable_search_[1].data(), curve_, s_.search_radius);
+  const CurveMatch m = match_along_curve(L, f.u, f.v, R, usable_search_[1].data(), curve_, s_.search_radius,
+                                         inv_norm_[1].data());
   if (!m.found) {
     p.status = PointStatus::no_candidates;
     return;
@@ -188,8 +195,8 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   }
   sample_epipolar_curve(rig_.left, R_rl_, T_rl_, rig_.right.undistort(Eigen::Vector2d(ru, rv)).normalized,
                         w_min, w_max, s_.search_step_px, back_curve_);
-  const CurveMatch back =
-      match_along_curve(R, ru, rv, L, usable_search_[0].data(), back_curve_, s_.search_radius);
+  const CurveMatch back = match_along_curve(R, ru, rv, L, usable_search_[0].data(), back_curve_,
+                                            s_.search_radius, inv_norm_[0].data());
   // The back search starts from the rounded right pixel: allow for that rounding.
   const Eigen::Vector2d rounding = Eigen::Vector2d(ru, rv) - lk.px;
   if (!back.found || (back.px - rounding - p.left_px).norm() > s_.lr_tolerance_px) {

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -108,5 +109,16 @@ class TexturedRenderer {
 // each scene's depth (wavelengths ~4-20 px). Empty for an unknown name.
 std::optional<TexturedSceneSettings> textured_preset(const std::string& name);
 const std::vector<std::string>& textured_preset_names();
+
+}  // namespace naneye::sim
+
+namespace naneye::sim {
+
+// A capture of textured scenes in the spec's byte stream (capture.raw), one pair per scene, with
+// the same free-running clocks as write_capture(); returns the truth depth of every pair. Bayer
+// renders are read back with `?color=grbg`.
+std::vector<cv::Mat> write_textured_capture(const std::filesystem::path& raw_file, const TexturedRenderer& r,
+                                            const std::vector<TexturedSceneSettings>& scenes,
+                                            std::uint64_t seed);
 
 }  // namespace naneye::sim

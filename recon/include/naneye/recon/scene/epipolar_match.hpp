@@ -37,7 +37,15 @@ struct CurveMatch {
 
 // ZNCC of the (2 radius + 1)^2 window of `src` around (u, v) against windows of `dst` centred at
 // the nearest pixel of each sample. `dst_usable`: non-zero where such a window lies in the domain.
+// `dst_inv_norm` (optional, from window_inverse_norms): 1 / |I - mean| of every dst window, so that
+// each sample costs one dot product.
 CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& dst,
-                             const std::uint8_t* dst_usable, const EpipolarCurve& curve, int radius);
+                             const std::uint8_t* dst_usable, const EpipolarCurve& curve, int radius,
+                             const float* dst_inv_norm = nullptr);
+
+// Per pixel, 1 / sqrt(sum (I - mean)^2) over its (2 radius + 1)^2 window where `usable`, else 0.
+// `integral` holds 2 (w + 1) (h + 1) doubles (sums and sums of squares).
+void window_inverse_norms(const GrayView& img, int radius, const std::uint8_t* usable, float* out,
+                          double* integral);
 
 }  // namespace naneye::recon::scene

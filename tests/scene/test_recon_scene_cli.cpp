@@ -1,0 +1,63 @@
+// `naneye recon --scene` run as a user runs it, on a capture of textured scenes, against the truth.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "../tools/run_cli.hpp"
+#include "scene_fixture.hpp"
+
+namespace naneye {
+namespace {
+
+TEST(ReconSceneCli, SceneObjectPerPairAgreesWithTruth) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("naneye-scene-cli-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto raw = dir / "capture.raw";
+  const std::vector<sim::TexturedSceneSettings> scenes = {*sim::textured_preset("plane"),
+                                                          *sim::textured_preset("sphere")};
+  const std::vector<cv::Mat> truth =
+      sim::write_textured_capture(raw, test::textured_renderer(false), scenes, 3);
+  const std::string calib = std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml";
+  const test::CliResult r =
+      test::run_cli("recon --calib " + calib + " --input " + raw.string() + " --json --scene");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::istringstream lines(r.out);
+  std::string line;
+  std::size_t pair = 0;
+  while (std::getline(lines, line)) {
+    ASSERT_LT(pair, truth.size());
+    const auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j.at("pair").get<std::size_t>(), pair);
+    EXPECT_TRUE(j.contains("t_left_ns"));
+    const auto& s = j.at("scene");
+    EXPECT_TRUE(s.at("depth").is_null());  // no dense map yet: no figure
+    int valid = 0, off = 0;
+    for (const auto& p : s.at("points")) {
+      if (!p.at("valid").get<bool>()) {
+        EXPECT_TRUE(p.at("xyz_mm").is_null());
+        EXPECT_TRUE(p.at("depth_sigma_mm").is_null());
+        continue;
+      }
+      ++valid;
+      const int u = p.at("left_px")[0].get<int>(), v = p.at("left_px")[1].get<int>();
+      const double z = p.at("xyz_mm")[2].get<double>(), zt = truth[pair].at<double>(v, u);
+      ASSERT_FALSE(std::isnan(zt)) << "a point where the right eye cannot see the surface";
+      EXPECT_GT(p.at("depth_sigma_mm").get<double>(), 0.0);
+      off += std::abs(z - zt) > 0.05 * zt;
+    }
+    EXPECT_EQ(s.at("valid_points").get<int>(), valid);
+    EXPECT_GE(valid, 300) << "pair " << pair;
+    EXPECT_LE(off, 0.01 * valid) << "pair " << pair;
+    ++pair;
+  }
+  EXPECT_EQ(pair, truth.size());
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace naneye
