@@ -6,7 +6,7 @@ packages=(
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libcpp-httplib-dev libusb-1.0-0-dev libsystemd-dev libtomlplusplus-dev zlib1g-dev
   libreaderwriterqueue-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
-  libumockdev-dev umockdev curl file chromium libyaml-cpp-dev
+  libumockdev-dev umockdev curl file chromium libyaml-cpp-dev opencv-doc
 )
 # The viewer's browser test (tests/browser) drives Debian's chromium with puppeteer-core from npm;
 # node comes with the machine, or from Debian (node 18 is enough for puppeteer-core 24).

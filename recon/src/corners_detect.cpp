@@ -42,6 +42,8 @@ const char* to_string(CornerFailure f) {
       return "fit_failed";
     case CornerFailure::fit_rejected:
       return "fit_rejected";
+    case CornerFailure::low_contrast:
+      return "low_contrast";
     case CornerFailure::polarity:
       return "polarity";
     case CornerFailure::not_planar:
@@ -86,6 +88,7 @@ CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& 
   map_ = std::make_shared<const UndistortMap>(camera_);
   work_.resize(1);
   work_.front().use_avx2 = work_.front().use_avx2 && settings_.allow_avx2;
+  z_reject_ = upper_normal_quantile(settings_.residual_false_reject);
 }
 
 bool CornerDetector::detect(const RawImageView& image, const CornerResult* previous, CornerResult& out) {
@@ -107,7 +110,7 @@ bool CornerDetector::detect(const RawImageView& image, const CornerResult* previ
     // Tracking reads only the board's rows: the luminance of those (and their margin) only. A fit
     // window that reaches the band's edge fails the tracking, which then searches the whole image.
     const auto [lo, hi] = tracking_rows(*previous);
-    raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn, lo, hi);
+    luminance_and_noise(image, lo, hi);
     const int usable_begin = row_begin_, usable_end = row_end_;
     row_begin_ = std::max(row_begin_, lo);
     row_end_ = std::min(row_end_, hi);
@@ -119,8 +122,27 @@ bool CornerDetector::detect(const RawImageView& image, const CornerResult* previ
     row_end_ = usable_end;
     if (!band) return full_search(out);
   }
-  raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn);
+  luminance_and_noise(image, 0, -1);
   return full_search(out);
+}
+
+void CornerDetector::luminance_and_noise(const RawImageView& image, int row_lo, int row_hi) {
+  bayer_ = image.layout == PixelLayout::bayer_grbg;
+  const int hi = row_hi < 0 ? height_ : row_hi;
+  // The white balance is the sensor's and the light's, not the frame's: tracking keeps the one its
+  // previous full search measured (two regressions over the mosaic cost more than the tracked fits).
+  const bool keep = bayer_ && (row_lo > 0 || row_hi >= 0) && balance_.valid;
+  if (!keep) balance_ = bayer_ ? estimate_cfa_balance(image, row_lo, hi) : CfaBalance{};
+  raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn, row_lo, row_hi, &balance_);
+  // The noise of the (balanced) mosaic, then of the luminance: the 3 x 3 binomial's weights
+  // squared sum to 36 / 256 (correlating neighbours, which residual_bound accounts for).
+  const float* mosaic = bayer_ ? scratch_.data() : luma_.data();
+  const int r0 = std::max(row_lo, image.ignore_edge_rows),
+            r1 = std::min(hi, height_ - image.ignore_edge_rows);
+  const NoiseModel m =
+      noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols, bayer_ ? 2 : 1);
+  const double f = bayer_ ? 36.0 / 256.0 : 1.0;
+  noise_ = NoiseModel{m.a * f, m.b * f, m.levels};
 }
 
 std::pair<int, int> CornerDetector::tracking_rows(const CornerResult& previous) const {
@@ -168,7 +190,7 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool
 
 bool CornerDetector::full_search(CornerResult& out) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  bool found = coarse_finder_.find(v, settings_.rows, settings_.cols, coarse_.data());
+  bool found = coarse_finder_.find(v, settings_.rows, settings_.cols, coarse_.data(), &noise_);
   if (!found && settings_.opencv_fallback) {
     found = coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_);
   }

@@ -16,6 +16,8 @@ constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
 constexpr double kTrustStepPx = 0.05;
 constexpr double kOutlierCheckRelative = 0.05;  // see the outlier check in fit_saddle_fast
 constexpr int kMaxOutliers = 4;
+// 10-bit full scale (1023) less the quantum of 8-bit data scaled by 4 (255 x 4 = 1020).
+constexpr float kClipDn = 1020.0f;
 using Arr = FastFitScratch::Arr;
 using Vec = Eigen::Matrix<double, kParams, 1>;
 // The normal equations of K active parameters: fixed sizes, so Eigen unrolls their solve.
@@ -266,7 +268,8 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
       wyx[n] = yx;
       wyy[n] = yy;
       val[n] = im[q];
-      wt[n] = std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
+      // A clipped pixel only says the light was at least full scale: it takes no part in the fit.
+      wt[n] = im[q] >= kClipDn ? 0.0f : std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
     }
   }
 
@@ -342,6 +345,7 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   out.sigma = p[4];
   out.contrast = std::abs(p[8]);
   out.rms = std::sqrt(cost / std::max(1.0, used));
+  out.weight = used;
   out.undistorted = undist;
   const Eigen::Vector2d q(p[0], p[1]);
   if (!p.allFinite() || q.cwiseAbs().maxCoeff() > half) return false;

@@ -77,9 +77,13 @@ int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col
   if (va < 0 || vb < 0 || vc < 0 || vd < 0) return 0;
   const float diag1 = std::min(va, vb), diag2 = std::min(vc, vd);
   const float diag1_max = std::max(va, vb), diag2_max = std::max(vc, vd);
-  // Both quadrants of one diagonal must be brighter than both of the other.
-  if (diag1 > diag2_max) return 1;
-  if (diag2 > diag1_max) return -1;
+  // Both quadrants of one diagonal must be brighter than both of the other, by at least half the
+  // difference of the diagonals' means: an X-junction's quadrants pair up (ratio ~1, less the
+  // shading), while an L- or T-junction at the board's border has two quadrants on the margin at
+  // one level (ratio ~0 whatever that grey is), which a fit with linear shading can pass.
+  const float mean_gap = 0.5f * std::abs((va + vb) - (vc + vd));
+  if (diag1 > diag2_max && diag1 - diag2_max >= 0.5f * mean_gap) return 1;
+  if (diag2 > diag1_max && diag2 - diag1_max >= 0.5f * mean_gap) return -1;
   return 0;
 }
 

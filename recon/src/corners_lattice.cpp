@@ -14,6 +14,7 @@ namespace naneye::recon {
 namespace {
 // Cells a component may hold beyond the pattern's (false links, left out).
 constexpr int kMaxStrayCells = 2;
+constexpr int kMaxCells = 2 * kMaxCorners + 64;
 constexpr std::array<std::array<int, 2>, 4> kDirs = {{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
 
 // Grid neighbours alternate polarity: their second harmonics point in opposite directions.
@@ -84,9 +85,12 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   int a = -1, b = -1, d = -1;
   if (!seed_square(seed, a, b, d)) return 0;
   const int side = 2 * std::max(rows, cols) + 3, o = side / 2;
-  const int limit = rows * cols + kMaxStrayCells;
+  // Room for a ring of cells around the pattern: the outer corners of the border squares (L- and
+  // T-junctions where the squares meet the board's margin or a background of similar grey), which
+  // a cluttered photograph lets pass the ring test. The placement below tells them apart.
+  const int limit = std::min((rows + 2) * (cols + 2), kMaxCells);
   std::fill(grid_.begin(), grid_.begin() + side * side, -1);
-  std::array<std::array<int, 2>, kMaxCorners + kMaxStrayCells> cells{};
+  std::array<std::array<int, 2>, kMaxCells> cells{};
   int n = 0;
   ++stamp_;
   auto put = [&](int i, int j, int c) {
@@ -145,23 +149,51 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   // The pattern must sit in the component at exactly one place (either way round): two places means
   // a larger board (nothing is certain), none means part of a board (cut by the edge, or a saddle
   // missed). A few cells beyond it are false links (the border squares' outer corners under strong
-  // distortion can pass the ring test) and are left out.
-  int placements = 0, pi = 0, pj = 0;
+  // distortion can pass the ring test) and are left out. A placement is certain when every cell of the
+  // component outside it is a false link (at most kMaxStrayCells of them) or not an X-junction: its ring
+  // symmetry (second over first harmonic) below max_outer_symmetry, where every inner corner of the placement
+  // is above it.
+  int placements = 0, uncertain = 0, pi = 0, pj = 0;
   bool p_i_is_col = true;
   for (int orient = 0; orient < (rows == cols ? 1 : 2); ++orient) {
     const int w = orient == 0 ? cols : rows, h = orient == 0 ? rows : cols;
     for (int j = j0; j + h - 1 <= j1; ++j) {
       for (int i = i0; i + w - 1 <= i1; ++i) {
         bool complete = true;
+        float inner = 1e30f;
         for (int jj = j; jj < j + h && complete; ++jj) {
           for (int ii = i; ii < i + w; ++ii) {
-            if (at(ii, jj) < 0) {
+            const int c = at(ii, jj);
+            if (c < 0) {
               complete = false;
               break;
             }
+            inner = std::min(inner, cand_[static_cast<std::size_t>(c)].symmetry);
           }
         }
         if (!complete) continue;
+        // The component's cells next to the placement (a row or column beyond it) that are
+        // X-junctions: a larger board's next row. Its L- and T-junctions (the border squares'
+        // outer corners) and links further out (clutter) do not make another placement.
+        int adjacent_x = 0, outside = 0;
+        for (int k = 0; k < n; ++k) {
+          const int ci = cells[static_cast<std::size_t>(k)][0], cj = cells[static_cast<std::size_t>(k)][1];
+          if (ci >= i && ci < i + w && cj >= j && cj < j + h) continue;
+          ++outside;
+          const bool next = ci >= i - 1 && ci <= i + w && cj >= j - 1 && cj <= j + h;
+          adjacent_x += next && cand_[static_cast<std::size_t>(at(ci, cj))].symmetry >= s_.max_outer_symmetry;
+        }
+        // Up to kMaxStrayCells cells beyond the pattern are false links, whatever they look like.
+        // Beyond that, the placement must be all X-junctions (a placement over a row of L-corners
+        // is not the pattern) with at most kMaxStrayCells X-junctions beside it (more: a larger
+        // board's next row, nothing is certain).
+        if (outside > kMaxStrayCells) {
+          if (inner < s_.max_outer_symmetry) continue;
+          if (adjacent_x > kMaxStrayCells) {
+            ++uncertain;
+            continue;
+          }
+        }
         ++placements;
         pi = i;
         pj = j;
@@ -169,7 +201,7 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
       }
     }
   }
-  if (placements > 1) return -1;
+  if (placements > 1 || uncertain > 0) return -1;
   if (placements == 0) return 0;
   for (int j = 0; j < (p_i_is_col ? rows : cols); ++j) {
     for (int i = 0; i < (p_i_is_col ? cols : rows); ++i) {
@@ -180,8 +212,10 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   return 1;
 }
 
-bool CoarseGridFinder::find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out) {
+bool CoarseGridFinder::find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out,
+                            const NoiseModel* noise) {
   count_ = 0;
+  noise_ = noise;
   if (img.width != width_ || img.height != height_ || rows < 2 || cols < 2 || rows * cols > kMaxCorners) {
     return false;
   }

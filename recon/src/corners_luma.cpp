@@ -9,7 +9,7 @@
 namespace naneye::recon {
 
 void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float defect_threshold_dn,
-                      int row_lo, int row_hi) {
+                      int row_lo, int row_hi, const CfaBalance* balance) {
   const int w = im.width, h = im.height;
   row_lo = std::clamp(row_lo, 0, h);
   row_hi = row_hi < 0 ? h : std::clamp(row_hi, row_lo, h);
@@ -95,6 +95,21 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
     }
   }
   if (!bayer) return;
+  if (balance && balance->valid) {
+    // Each site to G-equivalent values (corners_noise.hpp), after the defect test (which compares a
+    // pixel with its own site only) and before the filter mixes the sites.
+    std::array<float, 4> inv;
+    for (std::size_t k = 0; k < 4; ++k) inv[k] = 1.0f / balance->gain[k];
+    for (int r = in_lo; r < in_hi; ++r) {
+      float* p = f + r * w;
+      const std::size_t s0 = static_cast<std::size_t>((r & 1) * 2);
+      for (int c = 0; c + 1 < w; c += 2) {
+        p[c] = (p[c] - balance->offset[s0]) * inv[s0];
+        p[c + 1] = (p[c + 1] - balance->offset[s0 + 1]) * inv[s0 + 1];
+      }
+      if (w % 2) p[w - 1] = (p[w - 1] - balance->offset[s0]) * inv[s0];
+    }
+  }
   // 3x3 binomial [1 2 1; 2 4 2; 1 2 1] / 16 on the mosaic: at every site it sums R, G, B with
   // weights 1/4, 1/2, 1/4 and it is symmetric about the pixel centre, so edges do not move. At the
   // image border the mosaic is mirrored about the pixel (r - 1 -> r + 1 is the same Bayer site).

@@ -25,6 +25,31 @@ struct Grid {
 };
 }  // namespace
 
+namespace {
+// Sum over lags of the squared correlation of noise filtered by the 3 x 3 binomial ([1 2 1] / 4 per
+// axis: correlations 1, 2/3, 1/6 at lags 0, 1, 2, so 1 + 2 (4/9 + 1/36) = 1.944 per axis): a window
+// of n filtered pixels has the residual-variance spread of n / 3.78 independent ones.
+constexpr double kBayerNoiseCorrelation = 1.9444444444444444 * 1.9444444444444444;
+}  // namespace
+
+double CornerDetector::residual_bound(const SaddleFit& fit, double radius, double misfit) const {
+  const double var_n = noise_.variance(fit.shading.valid ? fit.shading.a : 0.0);
+  const double side = 2.0 * radius + 1.0;
+  double nu = (fit.weight > 0 ? fit.weight : side * side) - 9.0;
+  if (bayer_) nu /= kBayerNoiseCorrelation;
+  nu = std::max(nu, 4.0);
+  // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
+  const double t = 1.0 - 2.0 / (9.0 * nu) + z_reject_ * std::sqrt(2.0 / (9.0 * nu));
+  const double m = misfit * fit.contrast;
+  return var_n * t * t * t + m * m;
+}
+
+bool CornerDetector::fit_acceptable(const SaddleFit& fit, double radius) const {
+  return fit.rms * fit.rms <= residual_bound(fit, radius, settings_.model_misfit) &&
+         2.0 * fit.contrast >= settings_.min_contrast_snr * std::sqrt(noise_.variance(fit.shading.a)) &&
+         fit.sigma >= settings_.min_sigma_px && fit.sigma <= settings_.max_sigma_per_radius * radius;
+}
+
 double CornerDetector::fit_radius(double spacing) const {
   // The window must not reach the neighbouring corners' edges (blur included).
   return std::clamp(settings_.window_fraction * spacing, settings_.min_radius, settings_.max_radius);
@@ -51,7 +76,7 @@ bool CornerDetector::fit_corner(const SaddleInit& init, const EdgeDirections* ed
   }
   // A start far from the optimum can let the blur collapse (the erf turns into a step and its
   // gradient vanishes): retry once from a wide blur before giving up on the corner.
-  const bool poor = ok && (fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < 0.1);
+  const bool poor = ok && (!fit_acceptable(fit, radius) || fit.sigma < 0.1);
   if (!ok || poor) {
     SaddleInit wide = init;
     wide.sigma = 1.2;
@@ -125,6 +150,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   std::array<Eigen::Vector2d, kMaxCorners> start, first;
   std::array<SaddleFit, kMaxCorners> fits;
   std::array<std::uint8_t, kMaxCorners> flags{};
+  std::array<double, kMaxCorners> radii{};
   for (std::size_t i = 0; i < n; ++i) start[i] = out.corners[i].px;
   // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing. From a coarse
   // grid all 11 parameters are fitted at every corner. From the previous frame's grid, only a few
@@ -197,7 +223,8 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       // The grid's edge directions hold when the pass-1 corners are right to a few hundredths of a
       // pixel; a close board (sharp edges over few pixels) can miss that and leave the fixed-edge
       // fit poor: then free the edges (11 parameters) and keep the better fit.
-      if (fits[i].rms > settings_.max_relative_residual * fits[i].contrast) {
+      radii[i] = radius;
+      if (!fit_acceptable(fits[i], radius)) {
         SaddleFit free_fit;
         std::uint8_t free_flags = 0;
         if (fit_corner(again, nullptr, radius, 1e-3, free_fit, free_flags) && free_fit.rms < fits[i].rms) {
@@ -209,13 +236,24 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   }
   for (std::size_t i = 0; i < n; ++i) {
     const SaddleFit& fit = fits[i];
-    if (fit.contrast < settings_.min_contrast_dn ||
-        fit.rms > settings_.max_relative_residual * fit.contrast || fit.sigma < settings_.min_sigma_px ||
-        fit.sigma > settings_.max_sigma_px) {
+    const double var_n = noise_.variance(fit.shading.a);
+    rejection_ = CornerRejection{static_cast<int>(i),
+                                 fit.rms,
+                                 std::sqrt(residual_bound(fit, radii[i], settings_.model_misfit)),
+                                 2.0 * fit.contrast,
+                                 std::sqrt(var_n),
+                                 fit.shading.a,
+                                 fit.sigma,
+                                 radii[i]};
+    if (2.0 * fit.contrast < settings_.min_contrast_snr * std::sqrt(var_n)) {
+      failure_ = CornerFailure::low_contrast;
+      return false;
+    }
+    if (!fit_acceptable(fit, radii[i])) {
       failure_ = CornerFailure::fit_rejected;
       return false;
     }
-    if (fit.rms > 0.5 * settings_.max_relative_residual * fit.contrast) flags[i] |= kCornerFitPoor;
+    if (fit.rms * fit.rms > residual_bound(fit, radii[i], settings_.poor_misfit)) flags[i] |= kCornerFitPoor;
     if (!fit.undistorted || !camera_.in_domain(fit.px)) flags[i] |= kCornerBeyondFold;
     Corner& k = out.corners[i];
     k.px = fit.px;

@@ -139,9 +139,11 @@ bool CoarseGridFinder::ring_test(const LumaView& img, SaddleCandidate& c) const 
     return false;
   }
   float a1 = 0, b1 = 0, a2 = 0, b2 = 0;
+  std::array<float, 16> ring;
   for (int k = 0; k < 16; ++k) {
     const float cs = kRingCos[static_cast<std::size_t>(k)], sn = ring_sin(k);
     const float f = bilinear(smooth_.data(), width_, c.px.x() + rad * cs, c.px.y() + rad * sn);
+    ring[static_cast<std::size_t>(k)] = f;
     a1 += f * cs;
     b1 += f * sn;
     a2 += f * (cs * cs - sn * sn);
@@ -149,20 +151,52 @@ bool CoarseGridFinder::ring_test(const LumaView& img, SaddleCandidate& c) const 
   }
   const float h1 = std::hypot(a1, b1), h2 = std::hypot(a2, b2);
   c.phase = {a2, b2};
-  return h2 >= s_.min_harmonic_ratio * h1 && h2 * (2.0f / 16) >= s_.min_ring_amplitude_dn;
+  // Point symmetry: the ring's variation over the part of it that a half turn changes. An
+  // X-junction is its own half turn (every odd harmonic vanishes); an L- or T-junction is not,
+  // whatever the grey of the margin beside it.
+  float mean = 0;
+  for (const float f : ring) mean += f * (1.0f / 16);
+  float var = 0, odd = 0;
+  for (std::size_t k = 0; k < 16; ++k) {
+    var += (ring[k] - mean) * (ring[k] - mean);
+    if (k < 8) odd += 0.5f * (ring[k] - ring[k + 8]) * (ring[k] - ring[k + 8]);
+  }
+  c.symmetry = std::sqrt(var / std::max(2.0f * odd, 1e-6f));
+  const float level = bilinear(smooth_.data(), width_, c.px.x(), c.px.y());
+  const float min_amp = noise_ ? s_.min_ring_snr * std::sqrt(static_cast<float>(noise_->variance(level)))
+                               : s_.min_ring_amplitude_dn;
+  return h2 >= s_.min_harmonic_ratio * h1 && h2 * (2.0f / 16) >= min_amp;
 }
 
 void CoarseGridFinder::collect_candidates(const LumaView& img) {
+  // A cluttered photograph can hold more saddles than the buffer: rather than keep the first rows'
+  // only (scan order), raise the floor by 2 (sqrt 2 in contrast) until the strongest ones fit.
+  for (float boost = 1.0f; boost < 1e6f; boost *= 2.0f) {
+    if (collect_candidates(img, boost)) return;
+  }
+}
+
+bool CoarseGridFinder::collect_candidates(const LumaView& img, float boost) {
   const int w = width_;
   count_ = 0;
   constexpr float kPi = 3.14159265f;
   const float floor = s_.min_saddle_contrast_dn / (2.0f * kPi);
-  const float threshold = std::max(s_.min_relative_response * peak_, floor * floor);
+  const float relative = s_.min_relative_response * peak_;
+  // With a noise model the floor is (snr sigma(level) / 2 pi)^2, sigma at the smoothed level; the
+  // smallest it can be (the read noise alone) screens most pixels before the per-pixel bound.
+  const float snr2 = s_.min_saddle_snr * s_.min_saddle_snr / (4.0f * kPi * kPi);
+  const float threshold = boost * (noise_ ? std::max(relative, snr2 * static_cast<float>(noise_->b))
+                                          : std::max(relative, floor * floor));
   for (int r = img.row_begin + 2; r + 2 < img.row_end; ++r) {
     for (int c = 2; c + 2 < img.col_end; ++c) {
       const float* p = resp_.data() + r * w + c;
       const float v = *p;
       if (v < threshold) continue;
+      if (noise_ &&
+          v < boost * snr2 *
+                  static_cast<float>(noise_->variance(smooth_[static_cast<std::size_t>(r * w + c)]))) {
+        continue;
+      }
       bool is_max = true;
       // Ties go to the first pixel in scan order, so a flat top gives one candidate.
       for (int dr = -2; dr <= 2 && is_max; ++dr) {
@@ -186,9 +220,10 @@ void CoarseGridFinder::collect_candidates(const LumaView& img) {
       cand.response = v;
       cand.usable = false;
       if (!ring_test(img, cand)) continue;
-      if (++count_ == kCandidateCapacity) return;
+      if (++count_ == kCandidateCapacity) return false;
     }
   }
+  return true;
 }
 
 }  // namespace naneye::recon

@@ -48,6 +48,23 @@ void Renderer::init_defects() {
       static constexpr std::uint16_t kValues[] = {driver::kPixelMax, 0, 512};
       defect_values_[eye].push_back(kValues[kind(g)]);
     }
+    // Fixed-pattern noise from its own generator (the defects' positions stay what they were).
+    fpn_offset_[eye].clear();
+    fpn_gain_[eye].clear();
+    if (sensor_.column_fpn_dn > 0 || sensor_.dsnu_dn > 0 || sensor_.prnu > 0) {
+      Rng f(sensor_.defect_seed ^ (0x46504eULL + static_cast<std::uint64_t>(eye)));
+      std::normal_distribution<double> n01(0.0, 1.0);
+      std::vector<double> column(kSize);
+      for (auto& c : column) c = sensor_.column_fpn_dn * n01(f);
+      fpn_offset_[eye].resize(static_cast<std::size_t>(kSize) * kSize);
+      fpn_gain_[eye].resize(fpn_offset_[eye].size());
+      for (int p = 0; p < kSize * kSize; ++p) {
+        const auto k = static_cast<std::size_t>(p);
+        fpn_offset_[eye][k] =
+            static_cast<float>(column[static_cast<std::size_t>(p % kSize)] + sensor_.dsnu_dn * n01(f));
+        fpn_gain_[eye][k] = static_cast<float>(std::max(0.0, 1.0 + sensor_.prnu * n01(f)));
+      }
+    }
   }
 }
 
@@ -66,7 +83,10 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
     cv_rng.fill(scratch.noise, cv::RNG::NORMAL, 0.0, 1.0);
   }
   const auto& g = sensor_.channel_gain;
+  const int e = static_cast<int>(eye);
+  const bool fpn = !fpn_offset_[e].empty();
   for (int r = 0; r < kSize; ++r) {
+    const bool reset = r >= sensor_.reset_row && r < sensor_.reset_row + sensor_.reset_rows;
     const float* in = light->ptr<float>(r);
     const float* n01 = sensor_.noise ? scratch.noise.ptr<float>(r) : nullptr;
     std::uint16_t* o = out + static_cast<std::size_t>(r) * kSize;
@@ -74,8 +94,12 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
       double gain = 1.0;
       // GRBG: row 0 G R G R ..., row 1 B G B G ...
       if (sensor_.bayer) gain = (r & 1) == 0 ? ((c & 1) == 0 ? g[1] : g[0]) : ((c & 1) == 0 ? g[2] : g[1]);
+      const auto k = static_cast<std::size_t>(r * kSize + c);
+      if (fpn) gain *= fpn_gain_[e][k];
       const double signal = std::max(0.0, static_cast<double>(in[c]) * sensor_.white_dn * gain);
       double dn = sensor_.black_level_dn + signal;
+      if (fpn) dn += fpn_offset_[e][k];
+      if (reset) dn -= sensor_.reset_depth_dn;
       if (sensor_.noise) {
         // Shot noise: variance signal * gain (e-) -> signal / gain_e_per_dn in DN^2; plus read noise.
         const double sd =
@@ -86,7 +110,6 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
           static_cast<std::uint16_t>(std::clamp(std::lround(dn), 0L, static_cast<long>(driver::kPixelMax)));
     }
   }
-  const int e = static_cast<int>(eye);
   for (std::size_t i = 0; i < defects_[e].size(); ++i) out[defects_[e][i]] = defect_values_[e][i];
   if (sensor_.reference_pixels) {
     for (int c = 0; c < 4; ++c) out[c] = sensor_.reference_row0[c];

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "naneye/recon/camera.hpp"
+#include "naneye/recon/corners_noise.hpp"
 #include "naneye/recon/corners_refine.hpp"
 #include "naneye/recon/pair_result.hpp"
 
@@ -28,13 +29,27 @@ struct CoarseGridSettings {
   // Without a board the strongest noise saddle is ~4 (DN / px^2)^2, this floor ~40 and the weakest
   // board corner of bench_corners ~600: a frame without a board stops here, before any ring test.
   float min_saddle_contrast_dn = 40.0f;
+  // With the frame's noise model (find(..., noise)), the two DN floors above and below become
+  // multiples of the noise sigma at the candidate's level. Smoothed noise has -det(H) up to ~0.45
+  // sigma^2 over a 250 x 250 frame (var Hxx = 0.030 sigma^2, var Hxy = 0.0067 sigma^2 after the
+  // binomial): a 6 sigma saddle responds with 0.91 sigma^2, twice that. The fit then requires the
+  // same 6 sigma (CornerSettings::min_contrast_snr).
+  float min_saddle_snr = 6.0f;
   // Ring test on a circle of this radius (pixels) around the candidate: the second angular harmonic
   // (four alternating quadrants) must exceed the first (an edge, an L-corner) by this ratio and
   // have at least this amplitude (DN).
   float ring_radius = 3.0f;
   float min_harmonic_ratio = 1.2f;
   float min_ring_amplitude_dn = 15.0f;
+  // ... in noise sigmas: the amplitude's own noise is ~0.1 sigma (16 samples of the smoothed image,
+  // sigma x 0.27 each), so 2 sigma is 20 of its standard deviations, and a 6 sigma saddle has an
+  // amplitude of ~3.8 sigma (the square wave's second harmonic, 4 / pi of half the contrast).
+  float min_ring_snr = 2.0f;
   int max_candidates = 256;
+  // A lattice cell whose ring symmetry is below this is no X-junction (an L- or T-junction of the
+  // border squares against the margin has first and second harmonics alike: symmetry ~1): the
+  // pattern never includes one, and a grown component may extend beyond the pattern by such cells.
+  float max_outer_symmetry = 2.0f;
   // Lattice: a predicted neighbour is accepted within this share of the local step.
   float lattice_tolerance = 0.3f;
   int max_seeds = 12;
@@ -46,6 +61,7 @@ struct SaddleCandidate {
   Eigen::Vector2f und{0, 0};  // undistorted, normalized * fx (pixel-sized units)
   std::complex<float> phase;  // second angular harmonic: its sign flips between grid neighbours
   float response = 0;         // -det(Hessian) at the maximum
+  float symmetry = 0;         // ring test: second over first angular harmonic (an X-junction >> 1)
   bool usable = false;        // inside the camera model's domain
 };
 
@@ -58,7 +74,8 @@ class CoarseGridFinder {
   // `out` row-major in a consistent grid order (mirror and 180-degree turn not yet fixed: see
   // canonical_order). The pattern must fit the grown lattice at exactly one place: a larger board,
   // a grid with holes, or only part of the board in view gives false. Allocates nothing.
-  bool find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out);
+  // With `noise` (of the luminance), the contrast floors follow the frame's noise (settings).
+  bool find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out, const NoiseModel* noise = nullptr);
 
   // The lattice's undistortion: raw pixel -> normalized * fx, bilinear in a table of the exact
   // CameraModel::undistort where that is within kLutTolerancePx of it, else the exact inverse (next
@@ -79,6 +96,7 @@ class CoarseGridFinder {
 
   void saddle_map(const LumaView& img);
   void collect_candidates(const LumaView& img);
+  bool collect_candidates(const LumaView& img, float boost);  // false: the buffer overflowed
   bool ring_test(const LumaView& img, SaddleCandidate& c) const;
   // 1: the pattern found at one place in the component and written to out; 0: no complete
   // placement (try another seed); -1: two placements or more saddles than the pattern has plus a
@@ -98,8 +116,9 @@ class CoarseGridFinder {
   std::vector<int> order_, cell_of_;  // usable candidates by response; growth that took each (-1: none)
   std::vector<int> grid_;             // candidate per lattice cell (-1: empty), kSide x kSide
   int count_ = 0;
-  float peak_ = 0;  // the strongest response of the last saddle_map
-  int stamp_ = 0;   // id of the current growth, marks its candidates in cell_of_
+  float peak_ = 0;                     // the strongest response of the last saddle_map
+  int stamp_ = 0;                      // id of the current growth, marks its candidates in cell_of_
+  const NoiseModel* noise_ = nullptr;  // of the current find()
 };
 
 }  // namespace naneye::recon

@@ -39,7 +39,8 @@ struct SaddleFit {
   double contrast = 0;  // |b|: half the black-white difference at the corner
   double rms = 0;       // residual RMS, DN
   int iterations = 0;
-  int outliers = 0;  // pixels dropped as outliers (defect pixels)
+  int outliers = 0;   // pixels dropped as outliers (defect pixels)
+  double weight = 0;  // sum of the window's pixel weights (taper included): the residual's sample size
   bool converged = false;
   bool undistorted = false;  // false: fitted in raw pixels (window beyond the model's fold)
   SaddleShading shading{};   // referred to px (fit_saddle_fast only)

@@ -111,6 +111,7 @@ class Renderer {
   std::vector<Bilinear> edge_weights_;  // edge sub-samples as weights of the pixel's corner rays
   std::vector<int> defects_[2];         // pixel indices; value in defect_values_
   std::vector<std::uint16_t> defect_values_[2];
+  std::vector<float> fpn_offset_[2], fpn_gain_[2];  // per pixel; empty without fixed-pattern noise
 };
 
 // One call: builds a Renderer (precomputing rays), renders one pair.

@@ -38,6 +38,18 @@ struct SensorSettings {
   int defect_pixels = 5;
   std::uint64_t defect_seed = 0x4e616e457965ULL;
 
+  // Fixed-pattern noise of the die, fixed per sensor by defect_seed like the defects (real NanEye 2D
+  // figures: /work/shared/notes/measurements.md; 0 = off, the default, so earlier renders stay):
+  // column-to-column offsets (sd, DN), per-pixel offsets (DSNU, sd, DN), per-pixel gain (PRNU, sd).
+  double column_fpn_dn = 0.0;
+  double dsnu_dn = 0.0;
+  double prnu = 0.0;
+  // The real sensor's dark "reset line": reset_rows rows from reset_row read reset_depth_dn lower
+  // (additive; on hardware rows 168-244, moving with the exposure, -12..-24 DN, 2-3 rows). 0: none.
+  int reset_rows = 0;
+  int reset_row = 200;
+  double reset_depth_dn = 16.0;
+
   // Reference pixels of the spec: row 0 columns 0..3 and row 249 columns 246, 247. The levels follow
   // the vendor parser's check (row 0: px 0 and 2 <= 600, px 1 and 3 >= 800; row 249: px 246 <= 600,
   // px 247 >= 800); which of each pair is dark is unconfirmed on hardware, hence configurable.

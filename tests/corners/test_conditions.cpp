@@ -1,0 +1,124 @@
+// The imaging-condition matrix (imaging_conditions.hpp) in the ordinary suite: a few pairs per
+// condition, mono and Bayer, against the simulator's truth (bench/bench_conditions.cpp runs more and
+// prints the figures, with the OpenCV path beside ours). And the white balance: corners that do not
+// depend on the channel gains.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "corner_test_util.hpp"
+#include "imaging_conditions.hpp"
+
+namespace naneye::recon {
+namespace {
+
+constexpr int kPairsPerCondition = 2;
+
+TEST(Conditions, EveryConditionFindsEveryInViewBoardWithoutFalseCorners) {
+  const StereoRig& rig = test::paper_d3();
+  CornerDetector left(rig.left), right(rig.right);
+  for (const test::ImagingCondition& cond : test::imaging_conditions()) {
+    const sim::Renderer renderer(rig, cond.scene, cond.sensor);
+    std::mt19937_64 poses(31);
+    int in_view = 0, found = 0;
+    double worst = 0, sum2 = 0;
+    int n = 0;
+    for (int k = 0; k < kPairsPerCondition; ++k) {
+      const sim::Pose pose = test::random_pose(poses);
+      sim::Rng rng(700 + static_cast<std::uint64_t>(k));
+      const sim::RenderedPair p = renderer.render(pose, rng);
+      if (!p.truth.board_in_view) continue;
+      ++in_view;
+      for (const bool is_left : {true, false}) {
+        CornerDetector& det = is_left ? left : right;
+        CornerResult res;
+        const bool ok = det.detect_full(sim::raw_view(is_left ? p.left : p.right, cond.sensor.bayer), res);
+        EXPECT_TRUE(ok) << cond.name << " pair " << k << (is_left ? " left: " : " right: ")
+                        << to_string(det.last_failure());
+        if (!ok) continue;
+        found += !is_left;
+        const auto& truth = is_left ? p.truth.left_px : p.truth.right_px;
+        const bool turned = test::best_turn(res, truth);
+        for (int i = 0; i < res.count; ++i) {
+          const double e = (res.corners[static_cast<std::size_t>(i)].px -
+                            truth[static_cast<std::size_t>(turned ? res.count - 1 - i : i)])
+                               .norm();
+          worst = std::max(worst, e);
+          sum2 += e * e;
+          ++n;
+        }
+      }
+    }
+    const double rms = n ? std::sqrt(sum2 / n) : 0.0;
+    std::printf("%-48s in view %d, corners %d, RMS %.4f px, worst %.3f px\n", cond.name.c_str(), in_view, n,
+                rms, worst);
+    EXPECT_GE(in_view, 1) << cond.name;
+    // No false corner: every returned corner where the truth has it (OpenCV's path: 0.1-0.4 px RMS).
+    EXPECT_LE(worst, 0.25) << cond.name;
+    EXPECT_LE(rms, 0.08) << cond.name;
+  }
+}
+
+TEST(Conditions, NoBoardUnderTheRealSensorGivesNothing) {
+  const StereoRig& rig = test::paper_d3();
+  CornerDetector det(rig.left);
+  for (const bool bayer : {false, true}) {
+    sim::SceneSettings scene;
+    scene.board_present = false;
+    const sim::Renderer renderer(rig, scene, test::real_sensor(bayer));
+    for (int k = 0; k < 2; ++k) {
+      sim::Rng rng(90 + static_cast<std::uint64_t>(k));
+      const sim::RenderedPair p = renderer.render(sim::Pose{}, rng);
+      CornerResult res;
+      EXPECT_FALSE(det.detect_full(sim::raw_view(p.left, bayer), res));
+      EXPECT_EQ(res.count, 0);
+      EXPECT_EQ(det.last_failure(), CornerFailure::no_grid);
+    }
+  }
+}
+
+// The same view through GRBG sites of very different gains (noise off, so that only the gains
+// differ): the frame's own white balance makes the corners the same as with equal gains.
+TEST(Conditions, BayerCornersDoNotDependOnTheChannelGains) {
+  const StereoRig& rig = test::paper_d3();
+  CornerDetector det(rig.left);
+  std::mt19937_64 poses(5);
+  const sim::Pose pose = test::random_pose(poses);
+  auto corners = [&](std::array<double, 3> gains, CornerResult& res) {
+    // Noise and fixed-pattern noise off, whites below the clip at the largest gain (1.5 x 500 DN):
+    // only the gains differ between the renders (and the rounding to whole DN).
+    sim::SensorSettings s = test::real_sensor(true);
+    s.noise = false;
+    s.column_fpn_dn = s.dsnu_dn = s.prnu = 0.0;
+    s.white_dn = 500;
+    s.channel_gain = gains;
+    const sim::Renderer renderer(rig, sim::SceneSettings{}, s);
+    sim::Rng rng(1);
+    const sim::RenderedPair p = renderer.render(pose, rng);
+    return det.detect_full(sim::raw_view(p.left, true), res);
+  };
+  CornerResult equal;
+  ASSERT_TRUE(corners({1.0, 1.0, 1.0}, equal)) << to_string(det.last_failure());
+  for (const auto& g : std::vector<std::array<double, 3>>{
+           {1.5, 1.0, 0.5}, {0.5, 1.0, 1.5}, {0.5, 0.7, 1.5}, {1.2, 0.6, 0.9}}) {
+    CornerResult res;
+    ASSERT_TRUE(corners(g, res)) << g[0] << "/" << g[1] << "/" << g[2] << ": "
+                                 << to_string(det.last_failure());
+    ASSERT_EQ(res.count, equal.count);
+    double worst = 0;
+    for (int i = 0; i < res.count; ++i)
+      worst = std::max(
+          worst, (res.corners[static_cast<std::size_t>(i)].px - equal.corners[static_cast<std::size_t>(i)].px)
+                     .norm());
+    std::printf(
+        "gains %.1f/%.1f/%.1f: worst corner %.4f px from equal gains; balance R %.3f B %.3f Gb %.3f\n", g[0],
+        g[1], g[2], worst, det.cfa_balance().gain[1], det.cfa_balance().gain[2], det.cfa_balance().gain[3]);
+    EXPECT_LE(worst, 0.01);
+    // The balance recovers the gains relative to Gr (the black level is an offset, not a gain).
+    EXPECT_NEAR(det.cfa_balance().gain[1], g[0] / g[1], 0.01 * g[0] / g[1]);
+    EXPECT_NEAR(det.cfa_balance().gain[2], g[2] / g[1], 0.01 * g[2] / g[1]);
+  }
+}
+
+}  // namespace
+}  // namespace naneye::recon
