@@ -12,8 +12,8 @@
 //    hand, so a handler never waits for client bytes; httplib parses and routes it
 //    (Server::process_request, protected) from that buffer;
 //  - gives the connection back to the poll thread between keep-alive requests;
-//  - bounds the number of open connections (and so descriptors), closing the oldest idle keep-alive
-//    connection for a newcomer, or else answering the newcomer 503 at once;
+//  - bounds the number of open connections (and so descriptors), closing the oldest connection that
+//    has sent nothing (idle keep-alive, or silent) for a newcomer, or else answering it 503 at once;
 //  - answers 408 when a head is not complete within its deadline, 414/431 for an oversize request
 //    line or head, 413 for an oversize body, 411 for a chunked body.
 #include <sys/types.h>

@@ -98,8 +98,9 @@ void NeydWriter::write_chunk(std::span<const std::uint8_t> bytes, std::int64_t h
   put_le<std::uint32_t>(h + 4, static_cast<std::uint32_t>(bytes.size()));
   put_le<std::int64_t>(h + 8, host_ns);
   put_le<std::uint32_t>(h + 16, crc(bytes));
-  // One locked write: a flush() from another thread never lands between a chunk's header and its
-  // bytes, so what reaches the disk always ends at a chunk boundary.
+  // One locked write: the recorder's flush() from its own thread never lands inside a chunk. (stdio
+  // writes its buffer out by itself when it fills, which may still cut one chunk; a reader then
+  // reports the file truncated after the whole chunks before it.)
   flockfile(file_);
   put(h, sizeof h);
   put(bytes.data(), bytes.size());

@@ -21,7 +21,7 @@ struct Settings {
   int http_port = 8080;  // 0: an ephemeral port, logged once bound
   int http_threads = 8;  // threads running requests; each /v1/events stream holds one while open
   // Open client connections kept at most (lowered to fit the descriptor limit); past it the oldest
-  // idle keep-alive connection is closed for a newcomer, or the newcomer gets 503.
+  // connection that has sent nothing is closed for a newcomer, or the newcomer gets 503.
   int http_max_connections = 512;
   int http_head_timeout_ms = 2000;  // a request's head and body must arrive within this (else 408)
   int http_idle_timeout_ms = 5000;  // an idle keep-alive connection is closed after this
