@@ -102,14 +102,17 @@ TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
   // Still slow: another byte each, well within the head deadline.
   for (auto& s : slow) s->send("s");
   httplib::Client normal("127.0.0.1", port);
-  normal.set_read_timeout(1, 0);  // an answer after 1 s is a failure here, whatever the machine
-  normal.set_connection_timeout(1, 0);
+  // Starved, the answer never came (15 s and more); served, it takes milliseconds (the figure is
+  // printed below, and scripts/attack.sh measures the p99). 3 s leaves room for a sanitizer build on
+  // a loaded CI machine without letting starvation pass.
+  normal.set_read_timeout(3, 0);
+  normal.set_connection_timeout(3, 0);
   for (int k = 0; k < 20; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     const auto r = normal.Get("/v1/status");
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    ASSERT_TRUE(r) << "request " << k << " got no answer within 1 s with 500 slow connections open";
+    ASSERT_TRUE(r) << "request " << k << " got no answer within 3 s with 500 slow connections open";
     EXPECT_EQ(r->status, 200);
     if (k == 0) {
       const auto j = nlohmann::json::parse(r->body);
@@ -199,7 +202,9 @@ TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503
     slow.push_back(std::make_unique<Raw>(port));
     slow.back()->send("GET /v1/status HTTP/1.1\r\n");
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the daemon see the closed ones
+  // Let the daemon's poll thread (nice 5) read the eight partial heads and see the closed ones:
+  // a connection that has sent nothing yet may be closed for a newcomer, so the ninth would be served.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
   Raw late(port);
   late.send("GET /v1/status HTTP/1.1\r\n\r\n");
   const std::string r = late.read_all(std::chrono::milliseconds(1000));

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/calib3d.hpp>
@@ -51,7 +52,9 @@ double max_projection_difference(const Camera& a, const Camera& b) {
 }
 
 std::filesystem::path fresh_dir(const char* name) {
-  const auto d = std::filesystem::path(::testing::TempDir()) / name;
+  // Per process: the plain and sanitizer suites may run at once on one machine.
+  const auto d =
+      std::filesystem::path(::testing::TempDir()) / (std::string(name) + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(d);
   return d;
 }

@@ -67,8 +67,9 @@ class NeydWriter {
   void fail(int err);
   std::FILE* file_ = nullptr;
   std::string path_;
-  std::uint64_t chunks_ = 0, bytes_ = 0;
-  std::uint64_t flushed_chunks_ = 0, flushed_bytes_ = 0;  // as of the last successful flush()
+  mutable std::mutex io_mu_;              // write_chunk() (source thread) against flush() (recorder thread)
+  std::uint64_t chunks_ = 0, bytes_ = 0;  // under io_mu_
+  std::uint64_t flushed_chunks_ = 0, flushed_bytes_ = 0;  // as of the last successful flush(), under io_mu_
   std::atomic<bool> failed_{false};
   mutable std::mutex error_mu_;
   std::string error_;  // the first failure, written once under error_mu_
