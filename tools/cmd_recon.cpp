@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -31,9 +32,20 @@ struct ReconOptions {
   long long max_pairs = -1;
 };
 
+// "no_board_left (left: low_contrast, right: none)": what a user reads to tell "too dark" from
+// "no board" (the detector's reasons: recon::CornerFailure).
+std::string failure_text(const recon::PairResult& r) {
+  if (!r.failure) return "unknown";
+  std::string s = r.failure;
+  if (r.failure_left && r.failure_right)
+    s += std::string(" (left: ") + r.failure_left + ", right: " + r.failure_right + ")";
+  return s;
+}
+
 void print_line(const recon::PairResult& r) {
   if (!r.board_found) {
-    std::printf("pair %llu  no board\n", static_cast<unsigned long long>(r.pair));
+    std::printf("pair %llu  no board: %s\n", static_cast<unsigned long long>(r.pair),
+                failure_text(r).c_str());
     return;
   }
   int valid = 0;
@@ -66,6 +78,8 @@ void run_recon(const ReconOptions& o) {
   source->start();
   auto result = std::make_unique<recon::PairResult>();
   long long pairs = 0, found = 0;
+  // Pairs per reason (the pair's outcome and, per eye, the detector's), for the summary.
+  std::map<std::string, long long> outcomes, left_reasons, right_reasons;
   while (o.max_pairs < 0 || pairs < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
     if (!pair) {
@@ -75,14 +89,35 @@ void run_recon(const ReconOptions& o) {
     processor->process(*pair, *result);
     ++pairs;
     found += result->board_found;
-    if (o.json)
-      std::cout << daemon::result_to_json(*result).dump() << "\n";
-    else
+    if (!result->board_found) {
+      ++outcomes[result->failure ? result->failure : "unknown"];
+      if (result->failure_left) ++left_reasons[result->failure_left];
+      if (result->failure_right) ++right_reasons[result->failure_right];
+    }
+    if (o.json) {
+      nlohmann::json j = daemon::result_to_json(*result);
+      if (!result->board_found) {
+        j["failure"] = {{"outcome", result->failure ? result->failure : "unknown"},
+                        {"left", result->failure_left ? result->failure_left : "unknown"},
+                        {"right", result->failure_right ? result->failure_right : "unknown"}};
+      }
+      std::cout << j.dump() << "\n";
+    } else {
       print_line(*result);
+    }
   }
   source->stop();
+  if (o.json) {
+    // The last line: a summary object (it has "summary", where a pair has "pair").
+    nlohmann::json sum = {{"pairs", pairs}, {"found", found}, {"not_found", pairs - found}};
+    sum["failures"] = {{"outcome", outcomes}, {"left", left_reasons}, {"right", right_reasons}};
+    std::cout << nlohmann::json{{"summary", sum}}.dump() << "\n";
+  }
   std::cout.flush();
   std::fprintf(stderr, "naneye recon: %lld pairs, board found in %lld\n", pairs, found);
+  for (const auto& [why, n] : outcomes) std::fprintf(stderr, "  not found: %lld %s\n", n, why.c_str());
+  for (const auto& [why, n] : left_reasons) std::fprintf(stderr, "    left eye: %lld %s\n", n, why.c_str());
+  for (const auto& [why, n] : right_reasons) std::fprintf(stderr, "    right eye: %lld %s\n", n, why.c_str());
   if (auto err = source->error()) throw std::runtime_error(*err);
 }
 
