@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -50,9 +51,20 @@ void print_scene_line(const recon::scene::SparseResult& s) {
               s.points.size(), s.valid_count ? sigma / s.valid_count : NAN);
 }
 
+// "no_board_left (left: low_contrast, right: none)": what a user reads to tell "too dark" from
+// "no board" (the detector's reasons: recon::CornerFailure).
+std::string failure_text(const recon::PairResult& r) {
+  if (!r.failure) return "unknown";
+  std::string s = r.failure;
+  if (r.failure_left && r.failure_right)
+    s += std::string(" (left: ") + r.failure_left + ", right: " + r.failure_right + ")";
+  return s;
+}
+
 void print_line(const recon::PairResult& r) {
   if (!r.board_found) {
-    std::printf("pair %llu  no board\n", static_cast<unsigned long long>(r.pair));
+    std::printf("pair %llu  no board: %s\n", static_cast<unsigned long long>(r.pair),
+                failure_text(r).c_str());
     return;
   }
   int valid = 0;
@@ -88,6 +100,8 @@ void run_recon(const ReconOptions& o) {
   if (o.scene) scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
   recon::scene::SparseResult scene_result;
   long long pairs = 0, found = 0;
+  // Pairs per reason (the pair's outcome and, per eye, the detector's), for the summary.
+  std::map<std::string, long long> outcomes, left_reasons, right_reasons;
   while (o.max_pairs < 0 || pairs < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
     if (!pair) {
@@ -98,8 +112,18 @@ void run_recon(const ReconOptions& o) {
     if (scene) scene->reconstruct(frame_view(pair->left), frame_view(pair->right), scene_result);
     ++pairs;
     found += result->board_found;
+    if (!result->board_found) {
+      ++outcomes[result->failure ? result->failure : "unknown"];
+      if (result->failure_left) ++left_reasons[result->failure_left];
+      if (result->failure_right) ++right_reasons[result->failure_right];
+    }
     if (o.json) {
       nlohmann::json j = daemon::result_to_json(*result);
+      if (!result->board_found) {
+        j["failure"] = {{"outcome", result->failure ? result->failure : "unknown"},
+                        {"left", result->failure_left ? result->failure_left : "unknown"},
+                        {"right", result->failure_right ? result->failure_right : "unknown"}};
+      }
       if (scene) j["scene"] = scene_to_json(scene_result);
       std::cout << j.dump() << "\n";
     } else {
@@ -108,8 +132,17 @@ void run_recon(const ReconOptions& o) {
     }
   }
   source->stop();
+  if (o.json) {
+    // The last line: a summary object (it has "summary", where a pair has "pair").
+    nlohmann::json sum = {{"pairs", pairs}, {"found", found}, {"not_found", pairs - found}};
+    sum["failures"] = {{"outcome", outcomes}, {"left", left_reasons}, {"right", right_reasons}};
+    std::cout << nlohmann::json{{"summary", sum}}.dump() << "\n";
+  }
   std::cout.flush();
   std::fprintf(stderr, "naneye recon: %lld pairs, board found in %lld\n", pairs, found);
+  for (const auto& [why, n] : outcomes) std::fprintf(stderr, "  not found: %lld %s\n", n, why.c_str());
+  for (const auto& [why, n] : left_reasons) std::fprintf(stderr, "    left eye: %lld %s\n", n, why.c_str());
+  for (const auto& [why, n] : right_reasons) std::fprintf(stderr, "    right eye: %lld %s\n", n, why.c_str());
   if (auto err = source->error()) throw std::runtime_error(*err);
 }
 

@@ -42,18 +42,25 @@ PairOutcome StereoReconstructor::process(const RawImageView& left, const RawImag
   out.board.reset();
   out.metrics.reset();
   out.point_count = 0;
+  out.failure = out.failure_left = out.failure_right = nullptr;
 
   const bool track = settings_.tracking && have_previous_;
   const bool found_left = left_detector_.detect(left, track ? &previous_left_ : nullptr, left_);
   const bool found_right = right_detector_.detect(right, track ? &previous_right_ : nullptr, right_);
   have_previous_ = false;
+  out.failure_left = to_string(left_detector_.last_failure());
+  out.failure_right = to_string(right_detector_.last_failure());
+  const auto fail = [&out](PairOutcome o) {
+    out.failure = to_string(o);
+    return o;
+  };
   // A board seen by one eye only is not reported: its corners could not be triangulated, and a
   // monocular pose would be a different product with other error bars.
-  if (!found_left) return PairOutcome::no_board_left;
-  if (!found_right) return PairOutcome::no_board_right;
+  if (!found_left) return fail(PairOutcome::no_board_left);
+  if (!found_right) return fail(PairOutcome::no_board_right);
   const StereoIdCheck ids = resolve_stereo_ids(rig_, left_, right_, settings_.max_epipolar_px);
   if (ids.status != StereoIdStatus::consistent && ids.status != StereoIdStatus::flipped_right)
-    return PairOutcome::ids_ambiguous;
+    return fail(PairOutcome::ids_ambiguous);
 
   // Corners a detector flags (beyond the fold, poor fit) are kept in the result but not used.
   const std::uint8_t unusable = kCornerBeyondFold | kCornerFitPoor;
@@ -72,7 +79,8 @@ PairOutcome StereoReconstructor::process(const RawImageView& left, const RawImag
   reconstruct_pair(rig_, settings_.reconstruction,
                    std::span<const CornerObservation>(observations_.data(), static_cast<std::size_t>(n)),
                    out);
-  if (!out.board_found) return PairOutcome::pose_failed;
+  if (!out.board_found) return fail(PairOutcome::pose_failed);
+  out.failure_left = out.failure_right = nullptr;
   previous_left_ = left_;
   previous_right_ = right_;
   have_previous_ = true;

@@ -44,6 +44,11 @@ Figures run_capture(const std::string& name, const std::string& calib, const std
   std::string line;
   while (std::getline(lines, line)) {
     const json res = json::parse(line);
+    if (res.contains("summary")) {  // the last line: pairs per failure reason
+      EXPECT_EQ(res["summary"]["pairs"].get<int>(), f.pairs);
+      EXPECT_EQ(res["summary"]["found"].get<int>(), f.found);
+      continue;
+    }
     const int i = f.pairs++;
     if (i >= static_cast<int>(tpairs.size())) break;
     const json& t = tpairs[static_cast<std::size_t>(i)];
@@ -57,6 +62,7 @@ Figures run_capture(const std::string& name, const std::string& calib, const std
     if (!res["board_found"].get<bool>()) {
       EXPECT_TRUE(res["board"].is_null());
       EXPECT_TRUE(res["metrics"].is_null());
+      EXPECT_TRUE(res["failure"].is_object());  // why: the pair's outcome and each eye's reason
       continue;
     }
     ++f.found;

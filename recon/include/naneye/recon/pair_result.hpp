@@ -42,6 +42,12 @@ struct PairResult {
   std::array<PointResult, kMaxCorners> points{};
   std::optional<BoardResult> board;      // empty when the board is not found
   std::optional<MetricsResult> metrics;  // empty when the board is not found
+  // Why board_found is false (static strings, null when it is true or unknown): the pair's outcome
+  // (StereoReconstructor: to_string(PairOutcome)) and each eye's corner detector's reason
+  // (to_string(CornerFailure); "none" for an eye that found the board).
+  const char* failure = nullptr;
+  const char* failure_left = nullptr;
+  const char* failure_right = nullptr;
 };
 
 }  // namespace naneye::recon
