@@ -173,7 +173,7 @@ std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Publ
   thread_local Local local;
   if (local.text && local.seq == p.seq) return local.text;
   std::lock_guard lock(ctx.result_json_mutex);
-  if (ctx.result_json_seq != p.seq) {
+  if (!ctx.result_json || ctx.result_json_seq != p.seq) {
     auto text = std::make_shared<const std::string>(result_to_json(p.result).dump());
     // An event stream behind the latest result does not evict it.
     if (p.seq < ctx.result_json_seq) return text;
