@@ -1,0 +1,56 @@
+#pragma once
+// Dense scene depth on the left raw pixel grid (issue 14, docs/scene.md). The contract the daemon
+// and the CLI build on; the method lives in recon/scene/dense*.cpp:
+// - every pixel of the left raw grid gets a depth Z (mm, left camera frame) and its 1-sigma, or NaN
+//   in both where the result is not trusted (no texture, occluded, left-right inconsistent, outside
+//   either model's domain, or the right eye cannot see it). Nothing beyond either fold is ever given.
+// - rectification uses the exact model over the whole valid domain (no alpha-0 crop) and results are
+//   mapped back to the raw grid, so a client indexes the map with the pixel it sees.
+// - reconstruct() allocates nothing once warm: `out` keeps its capacity from pair to pair.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "naneye/recon/corners.hpp"
+#include "naneye/recon/rig.hpp"
+#include "naneye/recon/scene/sparse.hpp"
+
+namespace naneye::recon::scene {
+
+struct DenseSettings {
+  double z_min_mm = 5, z_max_mm = 150;  // mm; the depths searched (the issue's scenes: 8-80 mm)
+};
+
+struct DepthMap {
+  static constexpr float kNone = std::numeric_limits<float>::quiet_NaN();
+  int width = 0, height = 0;     // the left raw grid
+  std::vector<float> z_mm;       // row-major, width * height; NaN = no depth
+  std::vector<float> sigma_mm;   // 1-sigma of z_mm; NaN where z_mm is NaN
+  int valid_count = 0;           // pixels with a depth
+  int visible_count = 0;         // pixels both eyes can see (inside both domains, in both images)
+  double valid_share = 0;        // valid_count / visible_count (0 when nothing is visible)
+  double median_mm = std::numeric_limits<double>::quiet_NaN();  // of the valid depths
+  bool empty() const { return valid_count == 0; }
+  float z_at(int u, int v) const { return z_mm[static_cast<std::size_t>(v) * width + u]; }
+  float sigma_at(int u, int v) const { return sigma_mm[static_cast<std::size_t>(v) * width + u]; }
+};
+
+class DenseReconstructor {
+ public:
+  explicit DenseReconstructor(const StereoRig& rig, const DenseSettings& s = {});
+  ~DenseReconstructor();
+  DenseReconstructor(DenseReconstructor&&) noexcept;
+  DenseReconstructor& operator=(DenseReconstructor&&) noexcept;
+  // One pair from luminance already computed (SparseReconstructor::load_luma / luma()), so that the
+  // sparse and dense paths share one demosaic and one noise estimate.
+  void reconstruct(const StereoLuma& luma, DepthMap& out);
+  const StereoRig& rig() const;
+  const DenseSettings& settings() const;
+
+ private:
+  struct Impl;  // rectification maps, cost volume, scratch: sized once in the constructor
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace naneye::recon::scene
