@@ -6,32 +6,12 @@
 #include <array>
 #include <cmath>
 
+#include "naneye/recon/scene/interpolate.hpp"
+
 namespace naneye::recon::scene {
 namespace {
 constexpr int kMaxN = 15 * 15;
 
-// Cubic convolution (Keys, IEEE TASSP 29(6), 1981, a = -0.5): the texture here reaches
-// wavelengths of ~4 px, where bilinear interpolation's phase error biases LK towards whole pixels
-// ("pixel locking": 0.05 px rms measured on the simulator's scenes, noise-free, against 0.0x px
-// with this kernel; docs/scene.md). The caller keeps (x, y) inside [1, w - 3] x [1, h - 3].
-inline void keys_weights(float t, float* w) {
-  const float t2 = t * t, t3 = t2 * t;
-  w[0] = -0.5f * t3 + t2 - 0.5f * t;
-  w[1] = 1.5f * t3 - 2.5f * t2 + 1.0f;
-  w[2] = -1.5f * t3 + 2.0f * t2 + 0.5f * t;
-  w[3] = 0.5f * t3 - 0.5f * t2;
-}
-inline float cubic(const GrayView& g, double x, double y) {
-  const int c = static_cast<int>(x), r = static_cast<int>(y);
-  float wx[4], wy[4];
-  keys_weights(static_cast<float>(x - c), wx);
-  keys_weights(static_cast<float>(y - r), wy);
-  const float* p = g.data + (r - 1) * g.width + (c - 1);
-  float acc = 0;
-  for (int i = 0; i < 4; ++i, p += g.width)
-    acc += wy[i] * (wx[0] * p[0] + wx[1] * p[1] + wx[2] * p[2] + wx[3] * p[3]);
-  return acc;
-}
 }  // namespace
 
 LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, int u, int v,
@@ -85,7 +65,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const double x = M(0, 0) * q[k].x() + M(0, 1) * q[k].y() + M(0, 2),
                    y = M(1, 0) * q[k].x() + M(1, 1) * q[k].y() + M(1, 2);
       if (x < 1 || y < 1 || x >= dst.width - 3 || y >= dst.height - 3) return false;
-      m += wi[k] = cubic(dst, x, y);
+      m += wi[k] = sample_cubic(dst, x, y);
     }
     m /= n;
     double var = 0;

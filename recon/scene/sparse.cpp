@@ -67,7 +67,10 @@ const char* to_string(PointStatus s) {
 }
 
 SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSettings& s)
-    : rig_(rig), s_(s), detector_(rig.left.width(), rig.left.height(), s.features) {
+    : rig_(rig),
+      s_(s),
+      detector_(rig.left.width(), rig.left.height(), s.features),
+      ids_(rig.left.width(), rig.left.height(), s.max_features, s.ids) {
   R_lr_ = rig_.R;
   T_lr_ = rig_.T;
   R_rl_ = rig_.R.transpose();
@@ -84,6 +87,7 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
+  id_scratch_.assign(static_cast<std::size_t>(s_.max_features), 0);
   rays_.assign(2 * np, 0.0);
   inv_norm_[0].assign(np, 0.f);
   inv_norm_[1].assign(np, 0.f);
@@ -122,27 +126,43 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   window_inverse_norms(L, s_.search_radius, usable_search_[0].data(), inv_norm_[0].data(), integral_.data());
   window_inverse_norms(luma.right_view(), s_.search_radius, usable_search_[1].data(), inv_norm_[1].data(),
                        integral_.data());
-  int id = 0;
+  // Coarse to fine over the cell grid (SparseSettings::max_points): every 4th cell in both
+  // directions, then every 2nd, then the three remaining quarter lattices, raster order within each.
+  const int cell = s_.features.cell_px;
+  const auto rank = [cell](const Feature& f) {
+    const int cx = f.u / cell, cy = f.v / cell;
+    if (cx % 4 == 0 && cy % 4 == 0) return 0;
+    if (cx % 2 == 0 && cy % 2 == 0) return 1;
+    return 2 + (cx % 2) + 2 * (cy % 2) - 1;  // (1, 0) -> 2, (0, 1) -> 3, (1, 1) -> 4
+  };
+  std::sort(features_.begin(), features_.end(), [&](const Feature& a, const Feature& b) {
+    const int ra = rank(a), rb = rank(b);
+    if (ra != rb) return ra < rb;
+    return a.v != b.v ? a.v < b.v : a.u < b.u;
+  });
+  std::size_t tried = 0;
   for (const Feature& f : features_) {
+    if (out.valid_count >= s_.max_points) break;
     ScenePoint p;
-    p.id = id++;
     p.left_px = Eigen::Vector2d(f.u, f.v);
     p.right_px.setConstant(std::numeric_limits<double>::quiet_NaN());
     match(luma, f, p);
     out.valid_count += p.valid();
     out.points.push_back(p);
+    ++tried;
   }
+  const std::span<std::int64_t> ids(id_scratch_.data(), tried);
+  ids_.assign(L, std::span<const Feature>(features_.data(), tried), ids);
+  for (std::size_t k = 0; k < tried; ++k) out.points[k].id = ids[k];
 }
 
 void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, ScenePoint& p) {
   const GrayView L = luma.left_view(), R = luma.right_view();
-  const Undistorted ul = rig_.left.undistort(p.left_px);
-  if (!ul.ok()) {
-    p.status = PointStatus::no_candidates;
-    return;
-  }
+  // The feature is a pixel centre inside the domain: its ray was undistorted once (constructor).
+  const std::size_t fi = static_cast<std::size_t>(f.v) * luma.width + f.u;
+  const Eigen::Vector2d xl(rays_[2 * fi], rays_[2 * fi + 1]);
   const double w_min = 1.0 / s_.z_max_mm, w_max = 1.0 / s_.z_min_mm;
-  sample_epipolar_curve(rig_.right, R_lr_, T_lr_, ul.normalized, w_min, w_max, s_.search_step_px, curve_);
+  sample_epipolar_curve(rig_.right, R_lr_, T_lr_, xl, w_min, w_max, s_.search_step_px, curve_);
   const CurveMatch m = match_along_curve(L, f.u, f.v, R, usable_search_[1].data(), curve_, s_.search_radius,
                                          inv_norm_[1].data());
   if (!m.found) {
@@ -158,13 +178,12 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
     p.status = PointStatus::ambiguous;
     return;
   }
-  const Eigen::Matrix2d A0 = predicted_affine(rig_, ul.normalized, m.w);
+  const Eigen::Matrix2d A0 = predicted_affine(rig_, xl, m.w);
   // Where each template pixel lands in the right image for a surface facing the camera at the
   // coarse depth (exact model): near the image edges the map bends within the window.
   {
     const double z = 1.0 / m.w;
-    const Eigen::Vector3d Xc =
-        rig_.R * Eigen::Vector3d(ul.normalized.x(), ul.normalized.y(), 1.0) * z + rig_.T;
+    const Eigen::Vector3d Xc = rig_.R * Eigen::Vector3d(xl.x(), xl.y(), 1.0) * z + rig_.T;
     const Eigen::Vector2d c0 = rig_.right.project(Xc);
     const int rad = s_.lk.radius;
     for (int dr = -rad, k = 0; dr <= rad; ++dr)

@@ -12,6 +12,7 @@
 #include "naneye/recon/corners.hpp"
 #include "naneye/recon/rig.hpp"
 #include "naneye/recon/scene/epipolar_match.hpp"
+#include "naneye/recon/scene/feature_ids.hpp"
 #include "naneye/recon/scene/features.hpp"
 #include "naneye/recon/scene/lk_affine.hpp"
 
@@ -30,6 +31,12 @@ struct SparseSettings {
   double min_final_zncc = 0.9;   // after LK
   double lr_tolerance_px = 1.0;  // px; right-to-left search must land this close to the feature
   int max_features = 1536;
+  // The valid points a pair needs: the issue's >= 300 good points per pair, with room for a scene
+  // the right eye half misses. Features are tried coarse to fine over the image (one per 4 x 4
+  // cells first, then per 2 x 2, then the rest) and matching stops once this many are valid, so the
+  // points stay spread over the whole view and the time per pair stays bounded (docs/scene.md).
+  int max_points = 512;
+  FeatureIdSettings ids;
 };
 
 enum class PointStatus {
@@ -45,7 +52,7 @@ enum class PointStatus {
 const char* to_string(PointStatus s);
 
 struct ScenePoint {
-  int id = 0;
+  std::int64_t id = 0;  // stable across pairs while the feature is followed (feature_ids.hpp)
   Eigen::Vector2d left_px{0, 0}, right_px{0, 0};  // raw pixels (right: NaN unless matched)
   Eigen::Vector3d X = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());  // left frame, mm
   double depth_sigma_mm = std::numeric_limits<double>::quiet_NaN();
@@ -83,6 +90,8 @@ class SparseReconstructor {
   // Non-zero where a window of `radius` around the pixel lies inside the camera's model domain and
   // the active image (column 249 and the edge rows excluded). eye 0 = left.
   const std::vector<std::uint8_t>& usable(int eye) const { return usable_[eye]; }
+  // A new sequence (source restarted, seek): the next pair's features all get new ids.
+  void reset_ids() { ids_.reset(); }
 
  private:
   void match(const StereoLuma& luma, const Feature& f, ScenePoint& p);
@@ -96,6 +105,8 @@ class SparseReconstructor {
   StereoLuma luma_;
   FeatureDetector detector_;
   std::vector<Feature> features_;
+  FeatureIds ids_;
+  std::vector<std::int64_t> id_scratch_;
   EpipolarCurve curve_, back_curve_;
   std::vector<double> rays_;            // left pixel centres' normalized rays (x, y)
   std::vector<float> inv_norm_[2];      // per pixel: 1 / |window - mean| of the coarse window
