@@ -98,9 +98,12 @@ CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& 
     if (dst_inv_norm) {
       const float in = dst_inv_norm[r * dst.width + c];
       if (!(in > 0)) continue;
-      for (int dr = -radius, k = 0; dr <= radius; ++dr) {
-        const float* row = dst.data + (r + dr) * dst.width + c;
-        for (int dc = -radius; dc <= radius; ++dc, ++k) sdot += t[k] * row[dc];
+      // Float sums per row (7 products of <= 2^20 each: exact to ~1e-7 relative), double across rows.
+      for (int dr = -radius, k = 0; dr <= radius; ++dr, k += side) {
+        const float* row = dst.data + (r + dr) * dst.width + c - radius;
+        float acc = 0;
+        for (int dc = 0; dc < side; ++dc) acc += t[k + dc] * row[dc];
+        sdot += acc;
       }
       score[i] = sdot * in / tnorm;
     } else {

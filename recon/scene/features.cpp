@@ -13,12 +13,7 @@ double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask) {
   long n = 0;
   for (int r = 1; r + 1 < h; ++r)
     for (int c = 1; c + 1 < w; ++c) {
-      if (mask) {
-        bool ok = true;
-        for (int dr = -1; dr <= 1 && ok; ++dr)
-          for (int dc = -1; dc <= 1 && ok; ++dc) ok = mask[(r + dr) * w + c + dc] != 0;
-        if (!ok) continue;
-      }
+      if (mask && !mask[r * w + c]) continue;
       const double v = img.at(c - 1, r - 1) - 2 * img.at(c, r - 1) + img.at(c + 1, r - 1) -
                        2 * img.at(c - 1, r) + 4 * img.at(c, r) - 2 * img.at(c + 1, r) + img.at(c - 1, r + 1) -
                        2 * img.at(c, r + 1) + img.at(c + 1, r + 1);

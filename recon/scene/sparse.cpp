@@ -80,6 +80,9 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   usable_[1] = usable_mask(rig_.right, layout, s_.lk.radius + 1);
   usable_search_[0] = usable_mask(rig_.left, layout, s_.search_radius);
   usable_search_[1] = usable_mask(rig_.right, layout, s_.search_radius);
+  // The noise estimate's 3x3 mask inside the coarse window's domain (a square erosion by r then by 1
+  // is one by r + 1).
+  noise_mask_ = usable_mask(rig_.left, layout, s_.search_radius + 1);
   const std::size_t np = static_cast<std::size_t>(rig_.left.width()) * rig_.left.height();
   luma_.width = rig_.left.width();
   luma_.height = rig_.left.height();
@@ -121,7 +124,7 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   out.points.clear();
   out.valid_count = 0;
   const GrayView L = luma.left_view();
-  out.noise_sigma_dn = estimate_noise_sigma(L, usable_search_[0].data());
+  out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data());
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
   window_inverse_norms(L, s_.search_radius, usable_search_[0].data(), inv_norm_[0].data(), integral_.data());
   window_inverse_norms(luma.right_view(), s_.search_radius, usable_search_[1].data(), inv_norm_[1].data(),

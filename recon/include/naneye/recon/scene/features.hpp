@@ -30,8 +30,9 @@ struct Feature {
 
 // Standard deviation (DN) of white noise in an image, from the absolute response to the 3x3 mask
 // [1 -2 1; -2 4 -2; 1 -2 1], which cancels any locally quadratic signal (Immerkaer, "Fast noise
-// variance estimation", CVIU 64(2), 1996, Eq. 6). Over the pixels where `mask` (if given) is non-zero
-// on the whole 3x3 neighbourhood. Texture leaks in, so it errs high: a conservative floor.
+// variance estimation", CVIU 64(2), 1996, Eq. 6). Over the pixels where `mask` (if given) is non-zero:
+// the caller marks the pixels whose whole 3x3 neighbourhood is usable (once per camera, not per
+// frame). Texture leaks in, so it errs high: a conservative floor.
 double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask);
 
 // Reusable: pre-sized buffers for one image size, nothing allocated per frame.

@@ -16,7 +16,7 @@ namespace naneye::recon::scene {
 struct LkSettings {
   int radius = 4;  // px; template window (2 radius + 1)^2
   int max_iterations = 20;
-  double stop_step_px = 1e-3;  // px; stop when the centre moves less than this
+  double stop_step_px = 5e-3;  // px; stop when the centre moves less than this
   double max_travel_px = 2.5;  // px; from the start: beyond, the coarse match was wrong
   // The images' noise is white noise filtered by this 3x3 kernel (row-major; sums of squares need
   // not be 1): the identity for a mono sensor, raw_to_luminance's binomial for a Bayer one, whose

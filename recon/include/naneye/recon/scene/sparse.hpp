@@ -102,6 +102,7 @@ class SparseReconstructor {
   Eigen::Vector3d T_lr_, T_rl_;
   std::vector<std::uint8_t> usable_[2];         // LK window radius + 1
   std::vector<std::uint8_t> usable_search_[2];  // coarse window
+  std::vector<std::uint8_t> noise_mask_;        // left: 3x3 neighbourhood inside usable_search_[0]
   StereoLuma luma_;
   FeatureDetector detector_;
   std::vector<Feature> features_;
