@@ -35,7 +35,8 @@ struct DenseReconstructor::Impl {
   Impl(const StereoRig& r, const DenseSettings& st)
       : rig(r),
         s(st),
-        rect(build_rectified_rig(r, active_mask(r.left), active_mask(r.right))),
+        rect(build_rectified_rig(r, active_mask(r.left), active_mask(r.right),
+                                 band(r, st).min_disparity + band(r, st).num_disparities)),
         matcher(rect.width, rect.height, band(r, st)) {
     left.create(rect.height, rect.width, CV_32FC1);
     right.create(rect.height, rect.width, CV_32FC1);
@@ -81,6 +82,12 @@ const StereoRig& DenseReconstructor::rig() const {
 }
 const DenseSettings& DenseReconstructor::settings() const {
   return impl_->s;
+}
+const RectifiedMatcher& DenseReconstructor::matcher() const {
+  return impl_->matcher;
+}
+const MatchCounts& DenseReconstructor::match_counts() const {
+  return impl_->matcher.counts();
 }
 
 void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out) {

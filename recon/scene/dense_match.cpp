@@ -38,14 +38,14 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   sgbm_right_.create(h_, w_, CV_32FC1);
   disp_.create(h_, w_, CV_32FC1);
   sigma_.create(h_, w_, CV_32FC1);
-  for (auto* v : {&d_, &a_, &b_, &c_, &s2_, &kappa_px_, &n_, &z_}) v->assign(n, 0.f);
+  for (auto* v : {&d_, &a_, &b_, &c_, &s2_, &kappa_px_, &n_, &z_, &smooth_step_}) v->assign(n, 0.f);
   chan_.assign(10 * n, 0.f);
   sums_.assign(10 * n, 0.f);
   line_.assign(2 * static_cast<std::size_t>(std::max(w_, h_) + 1), 0.f);
   scratch_.assign(n, 0.f);
   line_copy_.assign(n, 0.f);
   acc_.assign(static_cast<std::size_t>(std::max(w_, h_)), 0.0);
-  rho_.assign(25, 0.f);
+  rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;
@@ -62,10 +62,15 @@ void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, 
                                      const cv::Mat& valid_right) {
   // SGBM wants 8 bits: both eyes on one scale, the brightest valid pixel at 255 (the pair's own
   // range, whatever the exposure).
-  double lo = 0, hi_l = 0, hi_r = 0;
-  cv::minMaxLoc(left, &lo, &hi_l, nullptr, nullptr, valid_left);
-  cv::minMaxLoc(right, &lo, &hi_r, nullptr, nullptr, valid_right);
-  const double scale = 255.0 / std::max({hi_l, hi_r, 1e-6});
+  float hi = 1e-6f;
+  for (int y = 0; y < h_; ++y) {
+    const float* l = left.ptr<float>(y);
+    const float* r = right.ptr<float>(y);
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w_; ++x) hi = std::max({hi, vl[x] ? l[x] : 0.f, vr[x] ? r[x] : 0.f});
+  }
+  const double scale = 255.0 / hi;
   left.convertTo(l8_, CV_8U, scale);
   right.convertTo(r8_, CV_8U, scale);
   sgbm_l_->compute(l8_, r8_, d16_);
@@ -86,23 +91,86 @@ void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, 
   }
 }
 
-void RectifiedMatcher::validate(const cv::Mat& valid_left) {
+void RectifiedMatcher::level_medians(float min_n) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  auto usable = [&](std::size_t i) { return std::isfinite(d_[i]) && n_[i] >= min_n && s2_[i] > 0; };
+  float lo[2] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
+  float hi[2] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest()};
+  for (std::size_t i = 0; i < n; ++i)
+    if (usable(i)) {
+      float f[2];
+      window_features(i, f);
+      for (int k = 0; k < 2; ++k) {
+        lo[k] = std::min(lo[k], f[k]);
+        hi[k] = std::max(hi[k], f[k]);
+      }
+    }
+  for (int k = 0; k < 2; ++k) {
+    bin_lo_[k] = lo[k];
+    bin_step_[k] = hi[k] > lo[k] ? (hi[k] - lo[k]) / kBinsPerAxis : 1.f;
+  }
+  std::array<int, kBins + 1> start{};
+  for (std::size_t i = 0; i < n; ++i)
+    if (usable(i)) ++start[static_cast<std::size_t>(bin_of(i)) + 1];
+  for (int b = 0; b < kBins; ++b) start[b + 1] += start[b];
+  std::array<int, kBins> fill{};
+  for (std::size_t i = 0; i < n; ++i)
+    if (usable(i)) {
+      const int b = bin_of(i);
+      scratch_[static_cast<std::size_t>(start[b] + fill[b]++)] = s2_[i];
+    }
+  for (int b = 0; b < kBins; ++b) {
+    const int cnt = start[b + 1] - start[b];
+    bin_median_[b] = -1;
+    if (cnt < kMinPerBin) continue;
+    auto first = scratch_.begin() + start[b], mid = first + cnt / 2;
+    std::nth_element(first, mid, first + cnt);
+    bin_median_[b] = *mid;
+  }
+  const int all = start[kBins];
+  residual_sigma_ = 0;
+  global_median_ = std::numeric_limits<double>::infinity();
+  if (all > 0) {
+    std::nth_element(scratch_.begin(), scratch_.begin() + all / 2, scratch_.begin() + all);
+    global_median_ = scratch_[static_cast<std::size_t>(all / 2)];
+    residual_sigma_ = std::sqrt(global_median_);
+  }
+}
+
+void RectifiedMatcher::window_features(std::size_t i, float f[2]) const {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  const float N = n_[i], sl = sums_[2 * n + i];
+  // The window's mean level (shot noise grows with it) and the log of its left contrast (the
+  // resampling's misfit grows with the texture's amplitude).
+  f[0] = sl / N;
+  f[1] = std::log(std::max(1e-6f, sums_[9 * n + i] / N - f[0] * f[0]));
+}
+
+int RectifiedMatcher::bin_of(std::size_t i) const {
+  float f[2];
+  window_features(i, f);
+  int b[2];
+  for (int k = 0; k < 2; ++k)
+    b[k] = std::clamp(static_cast<int>((f[k] - bin_lo_[k]) / bin_step_[k]), 0, kBinsPerAxis - 1);
+  return b[0] * kBinsPerAxis + b[1];
+}
+
+double RectifiedMatcher::expected_residual(std::size_t i) const {
+  const float m = bin_median_[static_cast<std::size_t>(bin_of(i))];
+  return m > 0 ? m : global_median_;
+}
+
+void RectifiedMatcher::validate(const cv::Mat& valid_left) {
   const int side = 2 * s_.radius + 1;
   const float min_n = static_cast<float>(s_.min_window_share * side * side);
-  // The median window's residual variance: the pair's noise as the fit sees it (interpolation and
-  // demosaicing included), against which each window's residual is tested.
-  std::size_t m = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (std::isfinite(d_[i]) && n_[i] >= min_n && s2_[i] > 0) scratch_[m++] = s2_[i];
-  double med = 0;
-  if (m > 0) {
-    std::nth_element(scratch_.begin(), scratch_.begin() + static_cast<long>(m / 2),
-                     scratch_.begin() + static_cast<long>(m));
-    med = scratch_[m / 2];
-  }
-  residual_sigma_ = std::sqrt(med);
+  // The residual variance a window like this one should have: the median over the windows of
+  // similar mean level (shot noise grows with the level, and the light's 1/d^2 spreads levels over
+  // the frame) and similar contrast (the resampling's misfit grows with the texture's amplitude).
+  // That is the pair's noise and misfit as the fit sees them, interpolation and demosaicing
+  // included; a wrong match or an occlusion stands out against it.
+  level_medians(min_n);
   const double zq = upper_normal_quantile(s_.residual_p);
+  MatchCounts c;
   for (int y = 0; y < h_; ++y) {
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
     const float* sg = sgbm_.ptr<float>(y);
@@ -113,19 +181,44 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
       od[x] = kNan;
       os[x] = kNan;
+      if (!vl[x]) continue;
+      ++c.candidates;
       const float d = d_[i];
-      if (!vl[x] || !std::isfinite(d) || !std::isfinite(sg[x]) || n_[i] < min_n || !(a_[i] > 0)) continue;
-      if (std::abs(d - sg[x]) > s_.max_shift_px) continue;
+      if (!std::isfinite(sg[x])) {
+        ++c.no_integer;
+        continue;
+      }
+      if (!std::isfinite(d) || n_[i] < min_n || !(a_[i] > 0)) {
+        ++c.window;
+        continue;
+      }
+      if (std::abs(d - sg[x]) > s_.max_shift_px) {
+        ++c.shift;
+        continue;
+      }
       const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2_[i] * z_[i]) / a_[i];
-      if (!(sigma <= s_.max_sigma_px) || std::abs(c_[i] / a_[i]) > std::max(sigma, 1e-3)) continue;
+      if (!(sigma <= s_.max_sigma_px)) {
+        ++c.texture;
+        continue;
+      }
+      if (std::abs(smooth_step_[i]) > std::max(sigma, 1e-3)) {
+        ++c.converged;
+        continue;
+      }
       // Chi-square upper quantile over the window's effective degrees of freedom (Wilson-Hilferty
       // cube approximation; Johnson, Kotz, Balakrishnan 1994, Eq. 18.24).
       const double nu = std::max(1.0, (n_[i] - 3.0) / std::max(1.0, static_cast<double>(kappa_px_[i])));
       const double t = 1 - 2 / (9 * nu) + zq * std::sqrt(2 / (9 * nu));
-      if (s2_[i] > med * t * t * t) continue;
+      if (s2_[i] > expected_residual(i) * t * t * t) {
+        ++c.residual;
+        continue;
+      }
       // Left-right: the right view's own disparity at the match.
       const int xr = static_cast<int>(std::lround(x - d));
-      if (xr < 0 || xr >= w_ || !std::isfinite(sr[xr]) || std::abs(sr[xr] - d) > s_.lr_tolerance_px) continue;
+      if (xr < 0 || xr >= w_ || !std::isfinite(sr[xr]) || std::abs(sr[xr] - d) > s_.lr_tolerance_px) {
+        ++c.left_right;
+        continue;
+      }
       od[x] = d;
       os[x] = static_cast<float>(sigma);
     }
@@ -144,11 +237,15 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       if (!std::isfinite(od[x])) continue;
       const int xr = static_cast<int>(std::lround(x - od[x]));
       if (xr < 0 || xr >= w_ || best[xr] > od[x] + s_.occlusion_px) {
+        ++c.occluded;
         od[x] = kNan;
         sigma_.ptr<float>(y)[x] = kNan;
+      } else {
+        ++c.valid;
       }
     }
   }
+  counts_ = c;
 }
 
 }  // namespace naneye::recon::scene

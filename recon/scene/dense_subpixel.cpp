@@ -18,7 +18,9 @@ namespace naneye::recon::scene {
 namespace {
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
-constexpr int kLag = 2;        // px; the noise autocorrelation's reach (bilinear + binomial: 2)
+// px; the residual autocorrelation's reach: the window radius (noise correlated by Keys' 4 taps and
+// a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
+constexpr int kLag = 3;
 
 // Sum over the (2r+1)^2 window (zero outside the image), separable running sums in double.
 void box_sum(const float* in, float* out, float* tmp, double* acc, int w, int h, int r) {
@@ -111,18 +113,33 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
                               const cv::Mat& valid_right) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   // Centre both images on the left's mean: the window sums stay small against float precision.
-  mean_ = cv::mean(left, valid_left)[0];
+  double sum = 0;
+  long count = 0;
+  for (int y = 0; y < h_; ++y) {
+    const float* l = left.ptr<float>(y);
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w_; ++x)
+      if (vl[x]) {
+        sum += l[x];
+        ++count;
+      }
+  }
+  mean_ = count > 0 ? sum / static_cast<double>(count) : 0.0;
   for (int y = 0; y < h_; ++y) {
     const float* sg = sgbm_.ptr<float>(y);
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
     for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNan;
   }
   const float* S = sums_.data();
+  float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
+  float* msolved = chan_.data() + 5 * n;
   for (int it = 0; it < s_.iterations; ++it) {
     gather(left, right, valid_right, it + 1 == s_.iterations);
     for (std::size_t i = 0; i < n; ++i) {
       const float N = S[i];
       n_[i] = N;
+      mstep[i] = 0;
+      msolved[i] = 0;
       if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
         d_[i] = kNan;
         continue;
@@ -145,7 +162,30 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       z_[i] = static_cast<float>(Sww / det);
       if (!(a > 0)) continue;  // anti-correlated: validate() refuses it
       // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
-      d_[i] += static_cast<float>(std::clamp(c / a, -0.5, 0.5));
+      mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
+      msolved[i] = 1;
+    }
+    // The window's shape is the reference field d_ (each pixel warped by its own reference
+    // disparity: slanted surfaces keep their shape), its correction the window's common step. The
+    // reference becomes the window mean of the corrected disparities, never a pixel's own: fed
+    // back per pixel, the fixed point would be every pixel matched alone (box(G r) = 0 everywhere
+    // is solved by r = 0 per pixel), the window's averaging undone and the noise amplified; and
+    // the integer stage's own scatter (its pixel-locked parabola) would stay in the window shape.
+    const bool last = it + 1 == s_.iterations;
+    if (last) {
+      for (std::size_t i = 0; i < n; ++i)
+        d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNan;  // the window's estimate at the final reference
+      break;
+    }
+    for (std::size_t i = 0; i < n; ++i) mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f;
+    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(d_[i])) continue;
+      const float cnt = S[5 * n + i];
+      const float next = cnt > 0 ? S[4 * n + i] / cnt : d_[i];
+      smooth_step_[i] = next - d_[i];
+      d_[i] = next;
     }
   }
   correlation(valid_left);
@@ -172,7 +212,8 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     const bool use = ch[i] > 0 && std::isfinite(d_[i]) && s2_[i] <= 3 * med;
     e[i] = use ? a_[i] * ch[n + i] + b_[i] - c_[i] * ch[3 * n + i] - ch[2 * n + i] : 0.f;
   }
-  double acc[2 * kLag + 1][2 * kLag + 1] = {};
+  constexpr int kSide = 2 * kLag + 1;
+  double acc[kSide][kSide] = {};
   for (int y = kLag; y < h_ - kLag; ++y)
     for (int x = kLag; x < w_ - kLag; ++x) {
       const float ei = e[static_cast<std::size_t>(y) * w_ + x];
@@ -182,7 +223,8 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
           acc[dy + kLag][dx + kLag] += ei * e[static_cast<std::size_t>(y + dy) * w_ + x + dx];
     }
   const double e0 = acc[kLag][kLag] > 0 ? acc[kLag][kLag] : 1.0;
-  for (int k = 0; k < 25; ++k) rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / 5][k % 5] / e0);
+  for (int k = 0; k < kSide * kSide; ++k)
+    rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / kSide][k % kSide] / e0);
   // kappa = sum_ij z_i z_j rho_ij / sum_i z_i^2 over the window, z the derivative regressor centred
   // on the window: the variance of the sandwich estimate over the white-noise one.
   float* z = chan_.data() + 4 * n;
@@ -200,7 +242,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
         for (int dx = -kLag; dx <= kLag; ++dx) {
           const int xx = x + dx;
           if (xx < 0 || xx >= w_) continue;
-          s += rho_[static_cast<std::size_t>((dy + kLag) * 5 + dx + kLag)] *
+          s += rho_[static_cast<std::size_t>((dy + kLag) * kSide + dx + kLag)] *
                z[static_cast<std::size_t>(yy) * w_ + xx];
         }
       }

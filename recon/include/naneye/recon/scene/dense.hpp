@@ -52,6 +52,9 @@ class DenseReconstructor {
   // sparse and dense paths share one demosaic and one noise estimate.
   void reconstruct(const StereoLuma& luma, DepthMap& out);
   const StereoRig& rig() const;
+  // Why the last pair's rectified pixels have no disparity (dense_match.hpp).
+  const MatchCounts& match_counts() const;
+  const RectifiedMatcher& matcher() const;
   const DenseSettings& settings() const;
 
  private:

@@ -17,6 +17,7 @@
 //      (a chi-square test against the median window); a left-right check (the right image's
 //      disparities from a second SGM run on the mirrored pair must agree); not occluded (no nearer
 //      surface claims the same right pixel); every tap inside both eyes' valid masks.
+#include <array>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -48,6 +49,20 @@ struct MatcherSettings {
   double min_window_share = 0.5;
 };
 
+// Why pixels have no disparity, one pair (each pixel counted at the first test it fails).
+struct MatchCounts {
+  int candidates = 0;  // pixels with left data
+  int no_integer = 0;  // SGBM gave none
+  int window = 0;      // too few window pixels with data in both eyes, or a singular fit
+  int shift = 0;       // refinement slid more than max_shift_px from the integer stage
+  int texture = 0;     // sigma above max_sigma_px
+  int converged = 0;   // the reference field still moving by more than sigma
+  int residual = 0;    // residual above the pair's noise (chi-square)
+  int left_right = 0;  // the right view's disparity disagrees
+  int occluded = 0;    // a nearer surface claims the same right pixel
+  int valid = 0;
+};
+
 class RectifiedMatcher {
  public:
   RectifiedMatcher(int width, int height, const MatcherSettings& s = {});
@@ -60,6 +75,7 @@ class RectifiedMatcher {
   const cv::Mat& sigma() const { return sigma_; }
   // SGBM's own result (its 1/16 px parabola; NaN where it gave none), for comparisons.
   const cv::Mat& integer_stage() const { return sgbm_; }
+  const MatchCounts& counts() const { return counts_; }
   double residual_sigma() const { return residual_sigma_; }  // median window's, input units
   double noise_correlation() const { return kappa_; }        // median correlation factor
   const MatcherSettings& settings() const { return s_; }
@@ -72,6 +88,21 @@ class RectifiedMatcher {
   void validate(const cv::Mat& valid_left);
   void gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool last);
   void correlation(const cv::Mat& valid_left);
+  void level_medians(float min_n);
+  void window_features(std::size_t i, float f[2]) const;
+  int bin_of(std::size_t i) const;
+  double expected_residual(std::size_t i) const;
+
+  // Residual variance per kind of window, 8 x 8 bins of (mean level, log contrast): shot noise is
+  // linear in the level, the misfit grows with contrast; 64 bins still hold ~1000 windows each on
+  // a 250 x 250 pair; a bin with fewer than 20 windows has no median worth testing against (the
+  // frame's median is used).
+  static constexpr int kBinsPerAxis = 8;
+  static constexpr int kBins = kBinsPerAxis * kBinsPerAxis;
+  static constexpr int kMinPerBin = 20;
+  std::array<float, kBins> bin_median_{};
+  float bin_lo_[2] = {0, 0}, bin_step_[2] = {1, 1};
+  double global_median_ = 0;
 
   MatcherSettings s_;
   int w_, h_;
@@ -81,12 +112,13 @@ class RectifiedMatcher {
   // Per pixel: the Gauss-Newton state (disparity, gain, offset, last step times gain, residual
   // variance, noise correlation factor, window count, (A^-1)_cc) and the window sums
   // (channel-major planes of w * h).
-  std::vector<float> d_, a_, b_, c_, s2_, kappa_px_, n_, z_;
+  std::vector<float> d_, a_, b_, c_, s2_, kappa_px_, n_, z_, smooth_step_;
+  MatchCounts counts_;
   std::vector<float> chan_, sums_, line_;
   std::vector<float> scratch_, line_copy_;
   std::vector<double> acc_;
   double mean_ = 0;
-  std::vector<float> rho_;  // the residual's autocorrelation over lags [-2, 2]^2
+  std::vector<float> rho_;  // the residual's autocorrelation over lags [-3, 3]^2
   double residual_sigma_ = 0, kappa_ = 1;
 };
 

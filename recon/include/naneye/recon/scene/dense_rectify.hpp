@@ -22,9 +22,9 @@ struct RectifiedRig {
   Eigen::Matrix3d R_left_rect = Eigen::Matrix3d::Identity(), R_right_rect = Eigen::Matrix3d::Identity();
   // Rectified pixel -> raw pixel of each eye (CV_32FC1 x / y; -1 where invalid).
   cv::Mat map_x[2], map_y[2];
-  // The same as bilinear taps: raw index of the top-left source pixel (-1: invalid) and the
-  // fractional offsets. cv::remap quantises positions to 1/32 px (INTER_BITS = 5), a fixed 0.009 px
-  // rms error per image, comparable with the disparity noise we aim at: resample() uses these.
+  // The same as interpolation taps: raw index of the source pixel at (floor x, floor y) (-1:
+  // invalid) and the fractional offsets. cv::remap quantises positions to 1/32 px (INTER_BITS = 5), a fixed
+  // 0.009 px rms error per image, comparable with the disparity noise we aim at: resample() uses these.
   std::vector<int> tap[2];
   std::vector<float> frac_x[2], frac_y[2];
   // CV_8UC1, rectified grid: 1 where the source pixel and its interpolation taps lie inside the
@@ -41,7 +41,9 @@ struct RectifiedRig {
 // `active`: the raw pixels that carry image data (CV_8UC1 per eye, left raw grid size). The virtual
 // focal length is the left camera's fx (the centre keeps its sampling; the periphery, compressed by
 // the barrel distortion, is oversampled rather than lost).
+// `pad_left_px`: columns added left of everything either eye sees, so that a matcher that cannot
+// match the first (min + number of disparities) columns (SGBM) loses none of the left view.
 RectifiedRig build_rectified_rig(const StereoRig& rig, const cv::Mat& active_left,
-                                 const cv::Mat& active_right);
+                                 const cv::Mat& active_right, int pad_left_px = 0);
 
 }  // namespace naneye::recon::scene
