@@ -66,8 +66,8 @@ RectifiedRig build_rectified_rig(const StereoRig& rig, const cv::Mat& active_lef
   out.f = rig.left.fx();
 
   // Extent: every raw pixel of either eye inside its domain, in rectified coordinates; columns the
-  // union (the right view lies up to the largest disparity to the left), rows the overlap (a row
-  // only one eye sees has no match).
+  // left view's (a right pixel outside them matches no left pixel; the pad adds the band to its
+  // left), rows the overlap (a row only one eye sees has no match).
   const CameraModel* cams[2] = {&rig.left, &rig.right};
   const cv::Mat* active[2] = {&active_left, &active_right};
   const Eigen::Matrix3d* rots[2] = {&out.R_left_rect, &out.R_right_rect};
@@ -81,8 +81,10 @@ RectifiedRig build_rectified_rig(const StereoRig& rig, const cv::Mat& active_lef
         const Eigen::Vector3d q = *rots[e] * Eigen::Vector3d(u.normalized.x(), u.normalized.y(), 1.0);
         if (q.z() <= 0) continue;
         const double x = out.f * q.x() / q.z(), y = out.f * q.y() / q.z();
-        xmin = std::min(xmin, x);
-        xmax = std::max(xmax, x);
+        if (e == 0) {
+          xmin = std::min(xmin, x);
+          xmax = std::max(xmax, x);
+        }
         ymin[e] = std::min(ymin[e], y);
         ymax[e] = std::max(ymax[e], y);
       }

@@ -214,8 +214,9 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   }
   constexpr int kSide = 2 * kLag + 1;
   double acc[kSide][kSide] = {};
-  for (int y = kLag; y < h_ - kLag; ++y)
-    for (int x = kLag; x < w_ - kLag; ++x) {
+  // Every other row and column: ~15 000 products per lag on a pair, the estimate's scatter ~0.01.
+  for (int y = kLag; y < h_ - kLag; y += 2)
+    for (int x = kLag; x < w_ - kLag; x += 2) {
       const float ei = e[static_cast<std::size_t>(y) * w_ + x];
       if (ei == 0) continue;
       for (int dy = -kLag; dy <= kLag; ++dy)
@@ -228,13 +229,16 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   // kappa = sum_ij z_i z_j rho_ij / sum_i z_i^2 over the window, z the derivative regressor centred
   // on the window: the variance of the sandwich estimate over the white-noise one.
   float* z = chan_.data() + 4 * n;
-  float* hz = chan_.data() + 5 * n;
   float* zz = chan_.data() + 6 * n;
   float* zh = chan_.data() + 7 * n;
   for (std::size_t i = 0; i < n; ++i)
     z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f;
   for (int y = 0; y < h_; ++y)
     for (int x = 0; x < w_; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
+      zz[i] = z[i] * z[i];
+      zh[i] = 0;
+      if (z[i] == 0) continue;  // no data: adds nothing to either window sum
       double s = 0;
       for (int dy = -kLag; dy <= kLag; ++dy) {
         const int yy = y + dy;
@@ -246,10 +250,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
                z[static_cast<std::size_t>(yy) * w_ + xx];
         }
       }
-      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
-      hz[i] = static_cast<float>(s);
-      zz[i] = z[i] * z[i];
-      zh[i] = z[i] * hz[i];
+      zh[i] = static_cast<float>(z[i] * s);
     }
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
