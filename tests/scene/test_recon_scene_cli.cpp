@@ -27,9 +27,8 @@ TEST(ReconSceneCli, SceneObjectPerPairAgreesWithTruth) {
   const std::vector<cv::Mat> truth =
       sim::write_textured_capture(raw, test::textured_renderer(false), scenes, 3);
   const std::string calib = std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml";
-  const test::CliResult r =
-      test::run_cli("recon --calib " + calib + " --input " + raw.string() + " --json --scene --depth-out " +
-                    (dir / "depth").string());
+  const test::CliResult r = test::run_cli("recon --calib " + calib + " --input " + raw.string() +
+                                          " --json --scene --depth-out " + (dir / "depth").string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   std::istringstream lines(r.out);
   std::string line;
