@@ -2,10 +2,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <vector>
 
 #include "../tools/run_cli.hpp"
 #include "scene_fixture.hpp"
@@ -23,8 +27,8 @@ TEST(ReconSceneCli, SceneObjectPerPairAgreesWithTruth) {
   const std::vector<cv::Mat> truth =
       sim::write_textured_capture(raw, test::textured_renderer(false), scenes, 3);
   const std::string calib = std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml";
-  const test::CliResult r =
-      test::run_cli("recon --calib " + calib + " --input " + raw.string() + " --json --scene");
+  const test::CliResult r = test::run_cli("recon --calib " + calib + " --input " + raw.string() +
+                                          " --json --scene --depth-out " + (dir / "depth").string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   std::istringstream lines(r.out);
   std::string line;
@@ -42,7 +46,41 @@ TEST(ReconSceneCli, SceneObjectPerPairAgreesWithTruth) {
     EXPECT_EQ(j.at("pair").get<std::size_t>(), pair);
     EXPECT_TRUE(j.contains("t_left_ns"));
     const auto& s = j.at("scene");
-    EXPECT_TRUE(s.at("depth").is_null());  // no dense map yet: no figure
+    // The dense map: its figures in the JSON, its PNGs (0.01 mm per unit, 0 = none) against the truth.
+    const auto& d = s.at("depth");
+    ASSERT_TRUE(d.is_object());
+    char name[32];
+    std::snprintf(name, sizeof name, "depth-%06zu.png", pair);
+    const cv::Mat z16 = cv::imread((dir / "depth" / name).string(), cv::IMREAD_UNCHANGED);
+    std::snprintf(name, sizeof name, "sigma-%06zu.png", pair);
+    const cv::Mat s16 = cv::imread((dir / "depth" / name).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(z16.type(), CV_16UC1);
+    ASSERT_EQ(s16.type(), CV_16UC1);
+    int given = 0, unseen = 0, bad = 0, no_sigma = 0;
+    std::vector<double> zs;
+    for (int v = 0; v < z16.rows; ++v)
+      for (int u = 0; u < z16.cols; ++u) {
+        if (z16.at<std::uint16_t>(v, u) == 0) {
+          EXPECT_EQ(s16.at<std::uint16_t>(v, u), 0);
+          continue;
+        }
+        ++given;
+        const double z = z16.at<std::uint16_t>(v, u) / 100.0, zt = truth[pair].at<double>(v, u);
+        zs.push_back(z);
+        no_sigma += s16.at<std::uint16_t>(v, u) == 0;
+        if (std::isnan(zt)) {
+          ++unseen;
+          continue;
+        }
+        bad += std::abs(z - zt) > 0.05 * zt;
+      }
+    EXPECT_EQ(d.at("valid_pixels").get<int>(), given);
+    EXPECT_GE(d.at("valid_share").get<double>(), 0.5);
+    EXPECT_EQ(no_sigma, 0);
+    EXPECT_LE(unseen, 0.01 * given);
+    EXPECT_LE(bad, 0.01 * given);
+    std::nth_element(zs.begin(), zs.begin() + static_cast<long>(zs.size() / 2), zs.end());
+    EXPECT_NEAR(d.at("median_mm").get<double>(), zs[zs.size() / 2], 0.011);  // the PNG's 0.01 mm rounding
     int valid = 0, off = 0;
     for (const auto& p : s.at("points")) {
       if (!p.at("valid").get<bool>()) {

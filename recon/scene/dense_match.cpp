@@ -1,0 +1,251 @@
+// The rectified matcher's integer stage and its validity decisions (dense_match.hpp); the
+// sub-pixel step is in dense_subpixel.cpp.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/calib3d.hpp>
+
+#include "naneye/recon/corners_noise.hpp"
+#include "naneye/recon/scene/dense_match.hpp"
+
+namespace naneye::recon::scene {
+namespace {
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
+  // P1, P2: the penalties OpenCV documents for 8-bit images (8 and 32 x channels x block area);
+  // no uniqueness, left-right or speckle filtering: validity is decided after the sub-pixel step.
+  const int area = s.sgm_block * s.sgm_block;
+  return cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block, 8 * area, 32 * area, -1, 0,
+                                0, 0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
+}
+}  // namespace
+
+RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings& s)
+    : s_(s), w_(width), h_(height) {
+  sgbm_l_ = make_sgbm(s_);
+  // The mirrored pair (right image first, both flipped) gives the right view's disparities with
+  // the same band.
+  sgbm_r_ = make_sgbm(s_);
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  l8_.create(h_, w_, CV_8UC1);
+  r8_.create(h_, w_, CV_8UC1);
+  l8f_.create(h_, w_, CV_8UC1);
+  r8f_.create(h_, w_, CV_8UC1);
+  d16_.create(h_, w_, CV_16SC1);
+  d16r_.create(h_, w_, CV_16SC1);
+  sgbm_.create(h_, w_, CV_32FC1);
+  sgbm_right_.create(h_, w_, CV_32FC1);
+  disp_.create(h_, w_, CV_32FC1);
+  sigma_.create(h_, w_, CV_32FC1);
+  for (auto* v : {&d_, &a_, &b_, &c_, &s2_, &kappa_px_, &n_, &z_, &smooth_step_}) v->assign(n, 0.f);
+  chan_.assign(10 * n, 0.f);
+  sums_.assign(10 * n, 0.f);
+  line_.assign(2 * static_cast<std::size_t>(std::max(w_, h_) + 1), 0.f);
+  scratch_.assign(n, 0.f);
+  line_copy_.assign(n, 0.f);
+  acc_.assign(static_cast<std::size_t>(std::max(w_, h_)), 0.0);
+  rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
+}
+
+RectifiedMatcher::~RectifiedMatcher() = default;
+
+void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                             const cv::Mat& valid_right) {
+  CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
+  integer_stage(left, right, valid_left, valid_right);
+  refine(left, right, valid_left, valid_right);
+  validate(valid_left);
+}
+
+void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                                     const cv::Mat& valid_right) {
+  // SGBM wants 8 bits: both eyes on one scale, the brightest valid pixel at 255 (the pair's own
+  // range, whatever the exposure).
+  float hi = 1e-6f;
+  for (int y = 0; y < h_; ++y) {
+    const float* l = left.ptr<float>(y);
+    const float* r = right.ptr<float>(y);
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w_; ++x) hi = std::max({hi, vl[x] ? l[x] : 0.f, vr[x] ? r[x] : 0.f});
+  }
+  const double scale = 255.0 / hi;
+  left.convertTo(l8_, CV_8U, scale);
+  right.convertTo(r8_, CV_8U, scale);
+  sgbm_l_->compute(l8_, r8_, d16_);
+  cv::flip(r8_, l8f_, 1);
+  cv::flip(l8_, r8f_, 1);
+  sgbm_r_->compute(l8f_, r8f_, d16r_);
+  const int invalid = (s_.min_disparity - 1) * 16;
+  for (int y = 0; y < h_; ++y) {
+    const short* dl = d16_.ptr<short>(y);
+    const short* dr = d16r_.ptr<short>(y);
+    float* ol = sgbm_.ptr<float>(y);
+    float* orr = sgbm_right_.ptr<float>(y);
+    for (int x = 0; x < w_; ++x) {
+      ol[x] = dl[x] <= invalid ? kNan : dl[x] / 16.f;
+      const short v = dr[w_ - 1 - x];
+      orr[x] = v <= invalid ? kNan : v / 16.f;
+    }
+  }
+}
+
+void RectifiedMatcher::level_medians(float min_n) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  auto usable = [&](std::size_t i) { return std::isfinite(d_[i]) && n_[i] >= min_n && s2_[i] > 0; };
+  float lo[2] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
+  float hi[2] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest()};
+  for (std::size_t i = 0; i < n; ++i)
+    if (usable(i)) {
+      float f[2];
+      window_features(i, f);
+      for (int k = 0; k < 2; ++k) {
+        lo[k] = std::min(lo[k], f[k]);
+        hi[k] = std::max(hi[k], f[k]);
+      }
+    }
+  for (int k = 0; k < 2; ++k) {
+    bin_lo_[k] = lo[k];
+    bin_step_[k] = hi[k] > lo[k] ? (hi[k] - lo[k]) / kBinsPerAxis : 1.f;
+  }
+  std::array<int, kBins + 1> start{};
+  for (std::size_t i = 0; i < n; ++i)
+    if (usable(i)) ++start[static_cast<std::size_t>(bin_of(i)) + 1];
+  for (int b = 0; b < kBins; ++b) start[b + 1] += start[b];
+  std::array<int, kBins> fill{};
+  for (std::size_t i = 0; i < n; ++i)
+    if (usable(i)) {
+      const int b = bin_of(i);
+      scratch_[static_cast<std::size_t>(start[b] + fill[b]++)] = s2_[i];
+    }
+  for (int b = 0; b < kBins; ++b) {
+    const int cnt = start[b + 1] - start[b];
+    bin_median_[b] = -1;
+    if (cnt < kMinPerBin) continue;
+    auto first = scratch_.begin() + start[b], mid = first + cnt / 2;
+    std::nth_element(first, mid, first + cnt);
+    bin_median_[b] = *mid;
+  }
+  const int all = start[kBins];
+  residual_sigma_ = 0;
+  global_median_ = std::numeric_limits<double>::infinity();
+  if (all > 0) {
+    std::nth_element(scratch_.begin(), scratch_.begin() + all / 2, scratch_.begin() + all);
+    global_median_ = scratch_[static_cast<std::size_t>(all / 2)];
+    residual_sigma_ = std::sqrt(global_median_);
+  }
+}
+
+void RectifiedMatcher::window_features(std::size_t i, float f[2]) const {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  const float N = n_[i], sl = sums_[2 * n + i];
+  // The window's mean level (shot noise grows with it) and the log of its left contrast (the
+  // resampling's misfit grows with the texture's amplitude).
+  f[0] = sl / N;
+  f[1] = std::log(std::max(1e-6f, sums_[9 * n + i] / N - f[0] * f[0]));
+}
+
+int RectifiedMatcher::bin_of(std::size_t i) const {
+  float f[2];
+  window_features(i, f);
+  int b[2];
+  for (int k = 0; k < 2; ++k)
+    b[k] = std::clamp(static_cast<int>((f[k] - bin_lo_[k]) / bin_step_[k]), 0, kBinsPerAxis - 1);
+  return b[0] * kBinsPerAxis + b[1];
+}
+
+double RectifiedMatcher::expected_residual(std::size_t i) const {
+  const float m = bin_median_[static_cast<std::size_t>(bin_of(i))];
+  return m > 0 ? m : global_median_;
+}
+
+void RectifiedMatcher::validate(const cv::Mat& valid_left) {
+  const int side = 2 * s_.radius + 1;
+  const float min_n = static_cast<float>(s_.min_window_share * side * side);
+  // The residual variance a window like this one should have: the median over the windows of
+  // similar mean level (shot noise grows with the level, and the light's 1/d^2 spreads levels over
+  // the frame) and similar contrast (the resampling's misfit grows with the texture's amplitude).
+  // That is the pair's noise and misfit as the fit sees them, interpolation and demosaicing
+  // included; a wrong match or an occlusion stands out against it.
+  level_medians(min_n);
+  const double zq = upper_normal_quantile(s_.residual_p);
+  MatchCounts c;
+  for (int y = 0; y < h_; ++y) {
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    const float* sg = sgbm_.ptr<float>(y);
+    const float* sr = sgbm_right_.ptr<float>(y);
+    float* od = disp_.ptr<float>(y);
+    float* os = sigma_.ptr<float>(y);
+    for (int x = 0; x < w_; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
+      od[x] = kNan;
+      os[x] = kNan;
+      if (!vl[x]) continue;
+      ++c.candidates;
+      const float d = d_[i];
+      if (!std::isfinite(sg[x])) {
+        ++c.no_integer;
+        continue;
+      }
+      if (!std::isfinite(d) || n_[i] < min_n || !(a_[i] > 0)) {
+        ++c.window;
+        continue;
+      }
+      if (std::abs(d - sg[x]) > s_.max_shift_px) {
+        ++c.shift;
+        continue;
+      }
+      const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2_[i] * z_[i]) / a_[i];
+      if (!(sigma <= s_.max_sigma_px)) {
+        ++c.texture;
+        continue;
+      }
+      if (std::abs(smooth_step_[i]) > std::max(sigma, 1e-3)) {
+        ++c.converged;
+        continue;
+      }
+      // Chi-square upper quantile over the window's effective degrees of freedom (Wilson-Hilferty
+      // cube approximation; Johnson, Kotz, Balakrishnan 1994, Eq. 18.24).
+      const double nu = std::max(1.0, (n_[i] - 3.0) / std::max(1.0, static_cast<double>(kappa_px_[i])));
+      const double t = 1 - 2 / (9 * nu) + zq * std::sqrt(2 / (9 * nu));
+      if (s2_[i] > expected_residual(i) * t * t * t) {
+        ++c.residual;
+        continue;
+      }
+      // Left-right: the right view's own disparity at the match.
+      const int xr = static_cast<int>(std::lround(x - d));
+      if (xr < 0 || xr >= w_ || !std::isfinite(sr[xr]) || std::abs(sr[xr] - d) > s_.lr_tolerance_px) {
+        ++c.left_right;
+        continue;
+      }
+      od[x] = d;
+      os[x] = static_cast<float>(sigma);
+    }
+  }
+  // Occlusion: a nearer surface (larger disparity) landing on the same right pixel hides this one.
+  for (int y = 0; y < h_; ++y) {
+    float* od = disp_.ptr<float>(y);
+    float* best = line_.data();
+    std::fill(best, best + w_, -1.f);
+    for (int x = 0; x < w_; ++x) {
+      if (!std::isfinite(od[x])) continue;
+      const int xr = static_cast<int>(std::lround(x - od[x]));
+      if (xr >= 0 && xr < w_) best[xr] = std::max(best[xr], od[x]);
+    }
+    for (int x = 0; x < w_; ++x) {
+      if (!std::isfinite(od[x])) continue;
+      const int xr = static_cast<int>(std::lround(x - od[x]));
+      if (xr < 0 || xr >= w_ || best[xr] > od[x] + s_.occlusion_px) {
+        ++c.occluded;
+        od[x] = kNan;
+        sigma_.ptr<float>(y)[x] = kNan;
+      } else {
+        ++c.valid;
+      }
+    }
+  }
+  counts_ = c;
+}
+
+}  // namespace naneye::recon::scene

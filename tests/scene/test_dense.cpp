@@ -1,0 +1,173 @@
+// Dense scene depth (recon/scene/dense.hpp) on the textured scenes against their truth.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "naneye/recon/scene/dense.hpp"
+#include "scene_fixture.hpp"
+
+namespace naneye {
+namespace {
+
+struct DenseFigures {
+  int truth_visible = 0, covered = 0, unseen = 0, outside = 0, valid = 0, bad5 = 0, inliers = 0;
+  double abs_rel = 0, rel_rms = 0, z_rms = 0;
+  double mean_z = 0;  // mm, of the covered pixels' truth
+};
+
+// Mean |dZ|/Z that a mean disparity error of `px` gives at the covered pixels' mean depth (Z / (f B)
+// per px of disparity, f B = 235.5 px mm).
+double depth_error_bound(const DenseFigures& f, double px) {
+  return px * f.mean_z / 235.5;
+}
+
+DenseFigures evaluate(const recon::scene::DepthMap& map, const cv::Mat& truth, const recon::StereoRig& rig) {
+  DenseFigures f;
+  double rel2 = 0, z2 = 0, rel = 0;
+  for (int r = 0; r < map.height; ++r)
+    for (int c = 0; c < map.width; ++c) {
+      const double zt = truth.at<double>(r, c);
+      const float z = map.z_at(c, r);
+      f.truth_visible += std::isfinite(zt);
+      if (std::isnan(z)) {
+        EXPECT_TRUE(std::isnan(map.sigma_at(c, r)));
+        continue;
+      }
+      ++f.valid;
+      if (!rig.left.in_domain(Eigen::Vector2d(c, r))) ++f.outside;
+      if (!std::isfinite(zt)) {
+        ++f.unseen;
+        continue;
+      }
+      ++f.covered;
+      f.mean_z += zt;
+      const double e = z - zt;
+      rel += std::abs(e) / zt;
+      if (std::abs(e) / zt > 0.05) {
+        ++f.bad5;
+        continue;
+      }
+      ++f.inliers;
+      rel2 += (e / zt) * (e / zt);
+      z2 += (e / map.sigma_at(c, r)) * (e / map.sigma_at(c, r));
+    }
+  f.abs_rel = rel / std::max(1, f.covered);
+  f.mean_z /= std::max(1, f.covered);
+  f.rel_rms = std::sqrt(rel2 / std::max(1, f.inliers));
+  f.z_rms = std::sqrt(z2 / std::max(1, f.inliers));
+  return f;
+}
+
+DenseFigures run(const sim::TexturedPair& p, bool bayer, recon::scene::DepthMap& map, const char* label) {
+  const auto& rig = test::paper_d3();
+  recon::scene::SparseReconstructor sr(rig);
+  sr.load_luma(sim::raw_view(p.left, bayer), sim::raw_view(p.right, bayer));
+  recon::scene::DenseReconstructor dr(rig);
+  dr.reconstruct(sr.luma(), map);
+  const DenseFigures f = evaluate(map, p.depth, rig);
+  std::printf(
+      "%-22s %-5s truth-visible %5d valid %5d coverage %.1f %%  unseen %d outside %d  bad-5 %.2f %%  "
+      "abs_rel %.3f %%  rel rms %.3f %%  rms(err/sigma) %.2f  share %.2f median %.1f mm\n",
+      label, bayer ? "bayer" : "mono", f.truth_visible, f.valid,
+      100.0 * f.covered / std::max(1, f.truth_visible), f.unseen, f.outside,
+      100.0 * f.bad5 / std::max(1, f.covered), 100 * f.abs_rel, 100 * f.rel_rms, f.z_rms, map.valid_share,
+      map.median_mm);
+  return f;
+}
+
+// What every dense map must hold, whatever the scene and sensor: nothing beyond the fold, no depth
+// where the right eye cannot see the surface (<= 1 %), <= 1 % of depths off by more than 5 %, the
+// sigma neither much too small nor much too large, and the map's own figures consistent.
+void expect_honest(const DenseFigures& f, const recon::scene::DepthMap& map, double max_z_rms,
+                   double max_bad5) {
+  EXPECT_EQ(f.outside, 0);
+  EXPECT_LE(f.unseen, 0.01 * f.valid);
+  EXPECT_LE(f.bad5, max_bad5 * f.covered);
+  EXPECT_GE(f.z_rms, 0.7);
+  EXPECT_LE(f.z_rms, max_z_rms);
+  EXPECT_EQ(map.valid_count, f.valid);
+  EXPECT_NEAR(map.valid_share, static_cast<double>(map.valid_count) / map.visible_count, 1e-12);
+}
+
+class DenseScene : public ::testing::TestWithParam<std::tuple<std::string, bool>> {};
+
+// The targets: coverage >= 80 % of the pixels both eyes see, <= 1 % bad-5 and rms(err/sigma)
+// within 0.7-1.4. Coverage and bad-5 are met on the mono plane, plane-far, sphere and height
+// renders; NOT yet where the texture is weak against the noise (the tube's dark far end) and on
+// Bayer pairs (~70 %: the residual test and the sigma bound refuse the mosaic's misfit). rms(err/
+// sigma) measures 1.31-1.52: the resampling's misfit is not all in the sigma. The cases that miss are
+// held to what the method gives today (coverage >= 50 %, bad-5 <= 2 %, rms(err/sigma) <= 1.7), not
+// to the target, so that a regression shows; docs/scene.md lists the gap.
+TEST_P(DenseScene, AgainstTruth) {
+  const auto& [name, bayer] = GetParam();
+  const auto& p = test::textured_pair(name, bayer);
+  recon::scene::DepthMap map;
+  const DenseFigures f = run(p, bayer, map, name.c_str());
+  const bool target = !bayer && name != "tube";
+  const double coverage = static_cast<double>(f.covered) / std::max(1, f.truth_visible);
+  EXPECT_GE(coverage, target ? 0.80 : 0.50);
+  expect_honest(f, map, 1.7, target ? 0.01 : 0.02);
+  // Depth error: a mean disparity error within 3x the sparse path's measured 0.024 px rms (0.07
+  // px); the tube (grazing walls, a dark far end), 0.12 px: measured 0.10.
+  EXPECT_LE(f.abs_rel, depth_error_bound(f, name == "tube" ? 0.12 : 0.07));
+}
+
+INSTANTIATE_TEST_SUITE_P(Presets, DenseScene,
+                         ::testing::Combine(::testing::Values("plane", "plane-far", "sphere", "tube",
+                                                              "height"),
+                                            ::testing::Bool()),
+                         [](const auto& info) {
+                           std::string n = std::get<0>(info.param);
+                           for (auto& c : n)
+                             if (c == '-') c = '_';
+                           return n + (std::get<1>(info.param) ? "_bayer" : "_mono");
+                         });
+
+// Decisions from the pair's own statistics, not from this simulator's defaults: the same honesty
+// under other imaging, paired changes (a render costs ~0.2 s): darker and weaker texture; more blur
+// and more noise; unequal Bayer gains.
+struct Imaging {
+  const char* label;
+  bool bayer;
+  void (*edit)(sim::SensorSettings&, sim::TexturedSceneSettings&);
+};
+
+class DenseImaging : public ::testing::TestWithParam<Imaging> {};
+
+TEST_P(DenseImaging, HonestOnTheSphere) {
+  const Imaging& c = GetParam();
+  sim::SensorSettings sensor;
+  sensor.bayer = c.bayer;
+  sim::TexturedSceneSettings scene = *sim::textured_preset("sphere");
+  c.edit(sensor, scene);
+  const sim::TexturedRenderer renderer(test::paper_d3(), sensor);
+  sim::Rng rng(11);
+  const sim::TexturedPair p = renderer.render(scene, rng);
+  recon::scene::DepthMap map;
+  const DenseFigures f = run(p, c.bayer, map, c.label);
+  expect_honest(f, map, 1.8, 0.01);
+  EXPECT_GE(static_cast<double>(f.covered) / std::max(1, f.truth_visible), c.bayer ? 0.5 : 0.8);
+}
+
+INSTANTIATE_TEST_SUITE_P(Conditions, DenseImaging,
+                         ::testing::Values(Imaging{"dim_low_contrast", false,
+                                                   [](sim::SensorSettings& s, sim::TexturedSceneSettings& t) {
+                                                     s.white_dn =
+                                                         300;  // DN; the default exposure's white is 760
+                                                     t.texture.contrast *= 0.5;
+                                                   }},
+                                           Imaging{"blur_noise", false,
+                                                   [](sim::SensorSettings& s, sim::TexturedSceneSettings&) {
+                                                     s.defocus_sigma_px = 0.9;  // px; the default is 0.35
+                                                     s.gain_e_per_dn =
+                                                         3;  // e/DN; 4x the default's shot-noise variance
+                                                   }},
+                                           Imaging{"bayer_gains", true,
+                                                   [](sim::SensorSettings& s, sim::TexturedSceneSettings&) {
+                                                     s.channel_gain = {0.5, 1.0, 0.9};
+                                                   }}),
+                         [](const auto& info) { return std::string(info.param.label); });
+
+}  // namespace
+}  // namespace naneye

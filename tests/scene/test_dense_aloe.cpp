@@ -1,0 +1,114 @@
+// The rectified matcher (recon/scene/dense_match.hpp) on a real stereo pair with ground truth:
+// Middlebury's Aloe (Scharstein & Pal, CVPR 2007), as Debian's opencv-doc ships it, already rectified,
+// against cv::StereoSGBM over the same disparity band. aloeGT.png is the left view's disparity at
+// the images' full size (1282 x 1110), in pixels, 0 = unknown (ximgproc's readGT reads it so).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "naneye/recon/scene/dense_match.hpp"
+
+namespace naneye {
+namespace {
+
+const std::filesystem::path kAloe = "/usr/share/doc/opencv-doc/examples/data";
+
+struct Bad {
+  int known = 0, given = 0, bad_given = 0;
+  double all() const { return static_cast<double>(bad_given + (known - given)) / std::max(1, known); }
+  double of_given() const { return static_cast<double>(bad_given) / std::max(1, given); }
+  double coverage() const { return static_cast<double>(given) / std::max(1, known); }
+};
+
+// bad-t: share of the pixels with a known disparity whose disparity is off by more than t px;
+// all() counts a pixel without disparity as bad (Middlebury's convention), of_given() only the given.
+Bad bad_pixels(const cv::Mat& disp, const cv::Mat& gt, double t) {
+  Bad b;
+  for (int r = 0; r < gt.rows; ++r)
+    for (int c = 0; c < gt.cols; ++c) {
+      const float g = gt.at<float>(r, c);
+      if (!(g > 0)) continue;
+      ++b.known;
+      const float d = disp.at<float>(r, c);
+      if (!std::isfinite(d)) continue;
+      ++b.given;
+      b.bad_given += std::abs(d - g) > t;
+    }
+  return b;
+}
+
+TEST(DenseAloe, MatcherNoWorseThanSgbm) {
+  if (!std::filesystem::exists(kAloe / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
+  const cv::Mat L = cv::imread((kAloe / "aloeL.jpg").string(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat R = cv::imread((kAloe / "aloeR.jpg").string(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat G = cv::imread((kAloe / "aloeGT.png").string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(L.empty() || R.empty() || G.empty());
+  // A quarter of the size keeps the test short (three SGM runs); the disparities scale with it.
+  constexpr int kDown = 4;
+  cv::Mat l, r, lf, rf, g;
+  cv::resize(L, l, cv::Size(), 1.0 / kDown, 1.0 / kDown, cv::INTER_AREA);
+  cv::resize(R, r, cv::Size(), 1.0 / kDown, 1.0 / kDown, cv::INTER_AREA);
+  g.create(l.rows, l.cols, CV_32FC1);
+  for (int y = 0; y < g.rows; ++y)
+    for (int x = 0; x < g.cols; ++x) {
+      // The block's centre pixel (unknown stays unknown; no averaging across depth edges).
+      const int gy = std::min(G.rows - 1, y * kDown + kDown / 2),
+                gx = std::min(G.cols - 1, x * kDown + kDown / 2);
+      const int v = G.at<std::uint8_t>(gy, gx);
+      g.at<float>(y, x) = v > 0 ? static_cast<float>(v) / kDown : 0.f;
+    }
+  double gmax = 0;
+  cv::minMaxLoc(g, nullptr, &gmax);
+  const int band = (static_cast<int>(std::ceil(gmax)) + 2 + 15) / 16 * 16;
+  l.convertTo(lf, CV_32F);
+  r.convertTo(rf, CV_32F);
+  const cv::Mat valid(l.rows, l.cols, CV_8UC1, cv::Scalar(1));
+
+  recon::scene::MatcherSettings ms;
+  ms.min_disparity = 0;
+  ms.num_disparities = band;
+  recon::scene::RectifiedMatcher matcher(l.cols, l.rows, ms);
+  matcher.match(lf, rf, valid, valid);
+
+  // OpenCV as its users run it: the parameters its documentation and samples give (block 5,
+  // P1 = 8 * 5^2, P2 = 32 * 5^2, uniqueness 10, speckle window 100 / range 32, left-right 1 px).
+  auto sgbm =
+      cv::StereoSGBM::create(0, band, 5, 8 * 25, 32 * 25, 1, 0, 10, 100, 32, cv::StereoSGBM::MODE_SGBM);
+  cv::Mat d16, dcv(l.rows, l.cols, CV_32FC1);
+  sgbm->compute(l, r, d16);
+  for (int y = 0; y < l.rows; ++y)
+    for (int x = 0; x < l.cols; ++x) {
+      const short v = d16.at<short>(y, x);
+      dcv.at<float>(y, x) = v < 0 ? NAN : v / 16.f;
+    }
+  const auto& k = matcher.counts();
+  std::printf(
+      "ours: candidates %d, refused: no integer %d, window %d, shift %d, texture %d, not converged %d, "
+      "residual %d, left-right %d, occluded %d; valid %d\n",
+      k.candidates, k.no_integer, k.window, k.shift, k.texture, k.converged, k.residual, k.left_right,
+      k.occluded, k.valid);
+  for (double t : {0.5, 1.0, 2.0}) {
+    const Bad ours = bad_pixels(matcher.disparity(), g, t), cv_ = bad_pixels(dcv, g, t);
+    std::printf(
+        "Aloe %dx%d band %d  bad-%.1f: ours %.2f %% of given (coverage %.1f %%, %.2f %% counting none as "
+        "bad)  "
+        "SGBM %.2f %% of given (coverage %.1f %%, %.2f %%)\n",
+        l.cols, l.rows, band, t, 100 * ours.of_given(), 100 * ours.coverage(), 100 * ours.all(),
+        100 * cv_.of_given(), 100 * cv_.coverage(), 100 * cv_.all());
+    if (t == 2.0) {
+      EXPECT_LE(ours.of_given(), cv_.of_given());
+      // Ours refuses more than OpenCV's filters do on this real pair (31 % of the known pixels
+      // against 72 %: large occlusions, JPEG, unequal exposure; docs/scene.md): held to that, so a
+      // lower bad-2.0 is not bought by refusing everything.
+      EXPECT_GE(ours.coverage(), 0.3 * cv_.coverage());
+    }
+  }
+}
+
+}  // namespace
+}  // namespace naneye
