@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 #include "naneye/sim/textured.hpp"
 
@@ -109,6 +110,100 @@ void opencv_path(const recon::StereoRig& rig, const recon::scene::StereoLuma& lu
   }
 }
 
+// Dense figures of a depth map on the left raw grid against the truth (NaN = none in both).
+struct DenseTally {
+  std::vector<double> ms;
+  long truth = 0, covered = 0, unseen = 0, valid = 0, bad5 = 0;
+  double rel_sum = 0;
+  void add(const cv::Mat& z, const cv::Mat& truth_z) {
+    for (int r = 0; r < truth_z.rows; ++r)
+      for (int c = 0; c < truth_z.cols; ++c) {
+        const double zt = truth_z.at<double>(r, c), zz = z.at<float>(r, c);
+        truth += std::isfinite(zt);
+        if (!std::isfinite(zz)) continue;
+        ++valid;
+        if (!std::isfinite(zt)) {
+          ++unseen;
+          continue;
+        }
+        ++covered;
+        rel_sum += std::abs(zz - zt) / zt;
+        bad5 += std::abs(zz - zt) > 0.05 * zt;
+      }
+  }
+  double p50() {
+    std::sort(ms.begin(), ms.end());
+    return ms.empty() ? NAN : ms[ms.size() / 2];
+  }
+};
+
+// The OpenCV dense path a user would glue: stereoRectify (alpha 0) + initUndistortRectifyMap +
+// remap + StereoSGBM (3-way, block 5, the documented P1 / P2, uniqueness 10, speckle 100 / 32,
+// left-right 1 px) + reprojectImageTo3D, read back at each left raw pixel's rectified position
+// (undistortPoints with R1, P1: OpenCV's own map, computed once like the rectification maps).
+struct OpenCvDense {
+  cv::Mat m1x, m1y, m2x, m2y, Q, R1, raw_x, raw_y;
+  cv::Ptr<cv::StereoSGBM> sgbm;
+  int min_disp = 0, num_disp = 48;
+  explicit OpenCvDense(const recon::StereoRig& rig) {
+    cv::Mat K1, K2, R, T, R2, P1, P2;
+    cv::eigen2cv(rig.left.K(), K1);
+    cv::eigen2cv(rig.right.K(), K2);
+    cv::eigen2cv(rig.R, R);
+    cv::eigen2cv(rig.T, T);
+    const auto& d1 = rig.left.distortion();
+    const auto& d2 = rig.right.distortion();
+    const cv::Mat D1 = (cv::Mat_<double>(1, 5) << d1.k1, d1.k2, d1.p1, d1.p2, d1.k3);
+    const cv::Mat D2 = (cv::Mat_<double>(1, 5) << d2.k1, d2.k2, d2.p1, d2.p2, d2.k3);
+    const cv::Size size(rig.left.width(), rig.left.height());
+    cv::stereoRectify(K1, D1, K2, D2, size, R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY, 0);
+    cv::initUndistortRectifyMap(K1, D1, R1, P1, size, CV_32FC1, m1x, m1y);
+    cv::initUndistortRectifyMap(K2, D2, R2, P2, size, CV_32FC1, m2x, m2y);
+    // The same depth band as ours (5-150 mm): |disparity| = f' B / Z.
+    const double fb = P1.at<double>(0, 0) * cv::norm(T);
+    min_disp = static_cast<int>(std::floor(fb / 150.0));
+    num_disp = (static_cast<int>(std::ceil(fb / 5.0)) - min_disp + 16) / 16 * 16;
+    sgbm = cv::StereoSGBM::create(min_disp, num_disp, 5, 8 * 25, 32 * 25, 1, 0, 10, 100, 32,
+                                  cv::StereoSGBM::MODE_SGBM_3WAY);
+    std::vector<cv::Point2f> px, rect;
+    for (int r = 0; r < size.height; ++r)
+      for (int c = 0; c < size.width; ++c) px.emplace_back(static_cast<float>(c), static_cast<float>(r));
+    cv::undistortPoints(px, rect, K1, D1, R1, P1);
+    raw_x.create(size, CV_32FC1);
+    raw_y.create(size, CV_32FC1);
+    for (int r = 0, k = 0; r < size.height; ++r)
+      for (int c = 0; c < size.width; ++c, ++k) {
+        raw_x.at<float>(r, c) = rect[static_cast<std::size_t>(k)].x;
+        raw_y.at<float>(r, c) = rect[static_cast<std::size_t>(k)].y;
+      }
+  }
+  void run(const recon::scene::StereoLuma& luma, const cv::Mat& truth, DenseTally& t) {
+    const double t0 = thread_cpu_s();
+    const cv::Mat l8 = to8(luma.left), r8 = to8(luma.right);
+    cv::Mat lr, rr, d16, df, xyz;
+    cv::remap(l8, lr, m1x, m1y, cv::INTER_LINEAR);
+    cv::remap(r8, rr, m2x, m2y, cv::INTER_LINEAR);
+    sgbm->compute(lr, rr, d16);
+    d16.convertTo(df, CV_32F, 1.0 / 16);
+    cv::reprojectImageTo3D(df, xyz, Q, true);
+    cv::Mat z(truth.rows, truth.cols, CV_32FC1, cv::Scalar(NAN));
+    const cv::Matx33d Rt = cv::Matx33d(R1).t();
+    for (int r = 0; r < z.rows; ++r)
+      for (int c = 0; c < z.cols; ++c) {
+        const int x = static_cast<int>(std::lround(raw_x.at<float>(r, c)));
+        const int y = static_cast<int>(std::lround(raw_y.at<float>(r, c)));
+        if (x < 0 || y < 0 || x >= xyz.cols || y >= xyz.rows) continue;
+        if (df.at<float>(y, x) < min_disp) continue;  // SGBM's "no disparity"
+        const cv::Vec3f p = xyz.at<cv::Vec3f>(y, x);
+        if (!std::isfinite(p[2]) || p[2] >= 10000) continue;  // reprojectImageTo3D's missing value
+        const cv::Vec3d q = Rt * cv::Vec3d(p[0], p[1], p[2]);
+        z.at<float>(r, c) = static_cast<float>(q[2]);
+      }
+    t.ms.push_back(1e3 * (thread_cpu_s() - t0));
+    t.add(z, truth);
+  }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -126,6 +221,10 @@ int main(int argc, char** argv) {
   const sim::TexturedRenderer renderer(rig, sensor);
   recon::scene::SparseReconstructor ours(rig);
   recon::scene::SparseResult res;
+  recon::scene::DenseReconstructor dense(rig);
+  recon::scene::DepthMap depth;
+  OpenCvDense cv_dense(rig);
+  std::vector<std::pair<DenseTally, DenseTally>> dense_rows;
   std::printf("bench_scene: %d renders per scene, %s, paper-d3 rig, one thread\n", seeds,
               bayer ? "GRBG Bayer" : "mono");
   std::printf("%-10s | %-44s | %-44s\n", "", "ours (sparse)", "OpenCV path");
@@ -133,6 +232,7 @@ int main(int argc, char** argv) {
               "outl %", "err %", "p50 ms", "pts", "good", "outl %", "err %");
   for (const auto& name : sim::textured_preset_names()) {
     Tally a, b;
+    DenseTally da, db;
     for (int s = 0; s < seeds; ++s) {
       sim::TexturedSceneSettings scene = *sim::textured_preset(name);
       scene.texture.seed += static_cast<std::uint64_t>(100 * s);
@@ -146,7 +246,14 @@ int main(int argc, char** argv) {
       for (const auto& q : res.points)
         if (q.valid()) a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y());
       opencv_path(rig, ours.luma(), p.depth, b);
+      // Dense on the luminance the sparse path made (the daemon shares it the same way).
+      const double t1 = thread_cpu_s();
+      dense.reconstruct(ours.luma(), depth);
+      da.ms.push_back(1e3 * (thread_cpu_s() - t1));
+      da.add(cv::Mat(depth.height, depth.width, CV_32FC1, depth.z_mm.data()), p.depth);
+      cv_dense.run(ours.luma(), p.depth, db);
     }
+    dense_rows.emplace_back(da, db);
     auto row = [](Tally& t) {
       std::printf(" %7.2f %7.0f %9.0f %8.2f%% %6.2f%%", t.p50(), double(t.points) / t.pairs,
                   double(t.points - t.outliers) / t.pairs, 100.0 * t.outliers / std::max(1L, t.points),
@@ -160,6 +267,25 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "pts/good: points per pair, all and within 5 %% of the truth where both eyes see it; outl: the "
-      "rest; err: mean |dZ|/Z of the good ones\n");
+      "rest; err: mean |dZ|/Z of the good ones\n\n");
+  std::printf("%-10s | %-50s | %-50s\n", "", "ours (dense)", "OpenCV dense path");
+  std::printf("%-10s | %7s %7s %8s %8s %8s %8s | %7s %7s %8s %8s %8s %8s\n", "scene", "p50 ms", "pix",
+              "cover %", "unseen %", "err %", "bad-5 %", "p50 ms", "pix", "cover %", "unseen %", "err %",
+              "bad-5 %");
+  for (std::size_t k = 0; k < dense_rows.size(); ++k) {
+    auto row = [&](DenseTally& t) {
+      std::printf(" %7.2f %7.0f %7.1f%% %7.2f%% %7.2f%% %7.2f%%", t.p50(), double(t.valid) / seeds,
+                  100.0 * t.covered / std::max(1L, t.truth), 100.0 * t.unseen / std::max(1L, t.valid),
+                  100.0 * t.rel_sum / std::max(1L, t.covered), 100.0 * t.bad5 / std::max(1L, t.covered));
+    };
+    std::printf("%-10s |", sim::textured_preset_names()[k].c_str());
+    row(dense_rows[k].first);
+    std::printf(" |");
+    row(dense_rows[k].second);
+    std::printf("\n");
+  }
+  std::printf(
+      "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
+      "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%\n");
   return 0;
 }

@@ -1,13 +1,17 @@
 // `naneye recon --calib FILE --input URI [--json]`: one result per stereo pair, in stream order, pairs
 // without a board included. A file is replayed at max speed with a lossless hand-over: no pair is
 // ever dropped. The per-pair step and the JSON are the daemon's own (one code path, one serializer).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,6 +21,7 @@
 #include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 #include "scene_json.hpp"
 
@@ -33,7 +38,32 @@ struct ReconOptions {
   bool no_tracking = false;
   long long max_pairs = -1;
   bool scene = false;
+  std::string depth_out;
 };
+
+// DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png (issue 14): 16-bit, 0.01 mm per unit on the left raw
+// grid, 0 = no depth. A valid sigma below half a unit is written as 1 unit, so 0 keeps meaning "none".
+void write_depth_pngs(const std::filesystem::path& dir, unsigned long long pair,
+                      const recon::scene::DepthMap& m, cv::Mat& z16, cv::Mat& s16) {
+  z16.create(m.height, m.width, CV_16UC1);
+  s16.create(m.height, m.width, CV_16UC1);
+  auto units = [](float mm, int floor) -> std::uint16_t {
+    if (!std::isfinite(mm)) return 0;
+    return static_cast<std::uint16_t>(std::clamp(std::lround(mm * 100.0), static_cast<long>(floor), 65535L));
+  };
+  for (int r = 0; r < m.height; ++r)
+    for (int c = 0; c < m.width; ++c) {
+      z16.at<std::uint16_t>(r, c) = units(m.z_at(c, r), 1);
+      s16.at<std::uint16_t>(r, c) = units(m.sigma_at(c, r), 1);
+    }
+  char name[64];
+  std::snprintf(name, sizeof name, "depth-%06llu.png", pair);
+  if (!cv::imwrite((dir / name).string(), z16))
+    throw std::runtime_error("cannot write " + (dir / name).string());
+  std::snprintf(name, sizeof name, "sigma-%06llu.png", pair);
+  if (!cv::imwrite((dir / name).string(), s16))
+    throw std::runtime_error("cannot write " + (dir / name).string());
+}
 
 recon::RawImageView frame_view(const driver::Frame& f) {
   recon::RawImageView v;
@@ -43,12 +73,14 @@ recon::RawImageView frame_view(const driver::Frame& f) {
   return v;
 }
 
-void print_scene_line(const recon::scene::SparseResult& s) {
+void print_scene_line(const recon::scene::SparseResult& s, const recon::scene::DepthMap& d) {
   double sigma = 0;
   for (const auto& p : s.points)
     if (p.valid()) sigma += p.depth_sigma_mm;
   std::printf("        scene: %d/%zu points valid, mean depth sigma %.3f mm\n", s.valid_count,
               s.points.size(), s.valid_count ? sigma / s.valid_count : NAN);
+  std::printf("        dense: %d/%d visible pixels with depth (%.1f %%), median %.2f mm\n", d.valid_count,
+              d.visible_count, 100 * d.valid_share, d.median_mm);
 }
 
 // "no_board_left (left: low_contrast, right: none)": what a user reads to tell "too dark" from
@@ -97,8 +129,15 @@ void run_recon(const ReconOptions& o) {
   source->start();
   auto result = std::make_unique<recon::PairResult>();
   std::unique_ptr<recon::scene::SparseReconstructor> scene;
-  if (o.scene) scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
+  std::unique_ptr<recon::scene::DenseReconstructor> dense;
+  if (o.scene || !o.depth_out.empty()) {
+    scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
+    dense = std::make_unique<recon::scene::DenseReconstructor>(rig);
+  }
+  if (!o.depth_out.empty()) std::filesystem::create_directories(o.depth_out);
   recon::scene::SparseResult scene_result;
+  recon::scene::DepthMap depth;
+  cv::Mat z16, s16;
   long long pairs = 0, found = 0;
   // Pairs per reason (the pair's outcome and, per eye, the detector's), for the summary.
   std::map<std::string, long long> outcomes, left_reasons, right_reasons;
@@ -109,7 +148,14 @@ void run_recon(const ReconOptions& o) {
       continue;
     }
     processor->process(*pair, *result);
-    if (scene) scene->reconstruct(frame_view(pair->left), frame_view(pair->right), scene_result);
+    if (scene) {
+      // One demosaic and noise estimate for both paths.
+      scene->load_luma(frame_view(pair->left), frame_view(pair->right));
+      scene->reconstruct(scene->luma(), scene_result);
+      dense->reconstruct(scene->luma(), depth);
+      if (!o.depth_out.empty())
+        write_depth_pngs(o.depth_out, static_cast<unsigned long long>(result->pair), depth, z16, s16);
+    }
     ++pairs;
     found += result->board_found;
     if (!result->board_found) {
@@ -124,11 +170,11 @@ void run_recon(const ReconOptions& o) {
                         {"left", result->failure_left ? result->failure_left : "unknown"},
                         {"right", result->failure_right ? result->failure_right : "unknown"}};
       }
-      if (scene) j["scene"] = scene_to_json(scene_result);
+      if (scene) j["scene"] = scene_to_json(scene_result, &depth);
       std::cout << j.dump() << "\n";
     } else {
       print_line(*result);
-      if (scene) print_scene_line(scene_result);
+      if (scene) print_scene_line(scene_result, depth);
     }
   }
   source->stop();
@@ -170,6 +216,9 @@ void add_recon_commands(CLI::App& app) {
   cmd->add_flag("--scene", o->scene,
                 "Also reconstruct whatever textured scene is in view: sparse points with depth sigmas "
                 "(docs/scene.md); the JSON gains a \"scene\" object");
+  cmd->add_option("--depth-out", o->depth_out,
+                  "With the scene: write DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png per pair (16-bit, "
+                  "0.01 mm per unit on the left raw grid, 0 = no depth); implies --scene");
   cmd->callback([o] { run_recon(*o); });
 }
 

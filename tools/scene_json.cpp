@@ -2,9 +2,11 @@
 // point carries null coordinates and its reason, never a guess.
 #include "scene_json.hpp"
 
+#include <cmath>
+
 namespace naneye::tools {
 
-nlohmann::json scene_to_json(const recon::scene::SparseResult& r) {
+nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const recon::scene::DepthMap* dense) {
   nlohmann::json points = nlohmann::json::array();
   for (const auto& p : r.points) {
     nlohmann::json q;
@@ -27,8 +29,15 @@ nlohmann::json scene_to_json(const recon::scene::SparseResult& r) {
   j["points"] = std::move(points);
   j["valid_points"] = r.valid_count;
   j["noise_sigma_dn"] = r.noise_sigma_dn;
-  // The dense map is not built yet (issue 14, docs/scene.md): no coverage figure to stand behind.
+  // No coverage figure without a dense map to stand behind it.
   j["depth"] = nullptr;
+  if (dense) {
+    // valid_share: of the pixels both eyes can see (DepthMap::visible_count); median of the valid.
+    j["depth"] = {{"valid_share", dense->valid_share},
+                  {"median_mm", std::isfinite(dense->median_mm) ? nlohmann::json(dense->median_mm) : nullptr},
+                  {"valid_pixels", dense->valid_count},
+                  {"visible_pixels", dense->visible_count}};
+  }
   return j;
 }
 

@@ -14,22 +14,28 @@
 
 #include "naneye/recon/corners.hpp"
 #include "naneye/recon/rig.hpp"
+#include "naneye/recon/scene/dense_match.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 
 namespace naneye::recon::scene {
 
 struct DenseSettings {
   double z_min_mm = 5, z_max_mm = 150;  // mm; the depths searched (the scenes: 8-80 mm)
+  // The rectified matcher (dense_match.hpp); its disparity band is set from z_min_mm / z_max_mm.
+  MatcherSettings matcher;
+  // Where the four rectified neighbours of a raw pixel differ by more than this, it sits on a depth
+  // edge: no depth rather than a blend of two surfaces (px of disparity; the left-right tolerance).
+  double max_neighbour_spread_px = 1.0;
 };
 
 struct DepthMap {
   static constexpr float kNone = std::numeric_limits<float>::quiet_NaN();
-  int width = 0, height = 0;     // the left raw grid
-  std::vector<float> z_mm;       // row-major, width * height; NaN = no depth
-  std::vector<float> sigma_mm;   // 1-sigma of z_mm; NaN where z_mm is NaN
-  int valid_count = 0;           // pixels with a depth
-  int visible_count = 0;         // pixels both eyes can see (inside both domains, in both images)
-  double valid_share = 0;        // valid_count / visible_count (0 when nothing is visible)
+  int width = 0, height = 0;    // the left raw grid
+  std::vector<float> z_mm;      // row-major, width * height; NaN = no depth
+  std::vector<float> sigma_mm;  // 1-sigma of z_mm; NaN where z_mm is NaN
+  int valid_count = 0;          // pixels with a depth
+  int visible_count = 0;        // pixels both eyes can see (inside both domains, in both images)
+  double valid_share = 0;       // valid_count / visible_count (0 when nothing is visible)
   double median_mm = std::numeric_limits<double>::quiet_NaN();  // of the valid depths
   bool empty() const { return valid_count == 0; }
   float z_at(int u, int v) const { return z_mm[static_cast<std::size_t>(v) * width + u]; }

@@ -1,0 +1,93 @@
+#pragma once
+// The dense matcher on a rectified pair (rows are epipolar lines, d = u_left - u_right >= 0), its
+// own unit so that it runs on any rectified images (the NanEye pair after dense_rectify, Middlebury's
+// Aloe in the tests). docs/scene.md, "Dense path":
+//   1. integer stage: OpenCV's semi-global matcher (Hirschmueller, PAMI 2008) over the disparity
+//      band, with none of its own validity filters (uniqueness, left-right, speckle): those
+//      decisions are ours, below;
+//   2. sub-pixel: Gauss-Newton on the rectified pixels, every pixel's own window with a gain and an
+//      offset between the eyes (L = a R(x - d) + b), right image sampled by Keys' cubic convolution
+//      (Keys 1981), each pixel of the window warped by its own disparity (so slanted surfaces keep
+//      their shape); the window sums are box filters, so every pixel costs the same;
+//   3. sigma per pixel from the fit: s^2 (A^-1)_dd / a^2 (A the normal matrix, s^2 the window's
+//      residual variance), times the correlation factor of the residual noise measured on the pair
+//      itself (interpolation and a Bayer filter make neighbouring pixels' noise correlated);
+//   4. validity: refinement converged near the integer stage; sigma small enough that the integer
+//      stage's half-pixel basin holds at 3 sigma; the residual consistent with the pair's noise
+//      (a chi-square test against the median window); a left-right check (the right image's
+//      disparities from a second SGM run on the mirrored pair must agree); not occluded (no nearer
+//      surface claims the same right pixel); every tap inside both eyes' valid masks.
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace cv {
+class StereoSGBM;
+}
+
+namespace naneye::recon::scene {
+
+struct MatcherSettings {
+  int min_disparity = 0;     // px; smallest disparity searched
+  int num_disparities = 48;  // px; band width (SGBM wants a multiple of 16)
+  int sgm_block = 5;         // px; SGBM's matching block (odd)
+  int radius = 3;            // px; sub-pixel window (2 r + 1)^2
+  int iterations = 4;        // Gauss-Newton steps (each pixel converges in 2-3 from SGBM's start)
+  // The integer stage is trusted to +-0.5 px: a match whose disparity sigma exceeds a third of
+  // that could sit in the wrong basin undetected (3 sigma).
+  double max_sigma_px = 0.5 / 3;
+  // Refinement may move a pixel this far from the integer stage (its 1/16 px parabola is within
+  // 0.5 px of the truth when right); further means it slid to another minimum.
+  double max_shift_px = 1.0;
+  // Residual test: a window whose residual variance exceeds the median window's by the chi-square
+  // upper quantile at this probability (its effective degrees of freedom) is not the same surface.
+  double residual_p = 1e-3;
+  double lr_tolerance_px = 1.0;  // px; left-right check (SGBM's own recommendation: 1)
+  double occlusion_px = 1.0;     // px; a nearer surface claiming the same right pixel by more
+  // Smallest share of the window's pixels that must carry data (near the domain's edges).
+  double min_window_share = 0.5;
+};
+
+class RectifiedMatcher {
+ public:
+  RectifiedMatcher(int width, int height, const MatcherSettings& s = {});
+  ~RectifiedMatcher();
+  // left, right: CV_32FC1 (width x height) luminance in any linear unit; valid_*: CV_8UC1, non-zero
+  // where the eye has data. Results in disparity() / sigma() (CV_32FC1, NaN = no match).
+  void match(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+             const cv::Mat& valid_right);
+  const cv::Mat& disparity() const { return disp_; }
+  const cv::Mat& sigma() const { return sigma_; }
+  // SGBM's own result (its 1/16 px parabola; NaN where it gave none), for comparisons.
+  const cv::Mat& integer_stage() const { return sgbm_; }
+  double residual_sigma() const { return residual_sigma_; }  // median window's, input units
+  double noise_correlation() const { return kappa_; }        // median correlation factor
+  const MatcherSettings& settings() const { return s_; }
+
+ private:
+  void integer_stage(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                     const cv::Mat& valid_right);
+  void refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+              const cv::Mat& valid_right);
+  void validate(const cv::Mat& valid_left);
+  void gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool last);
+  void correlation(const cv::Mat& valid_left);
+
+  MatcherSettings s_;
+  int w_, h_;
+  cv::Ptr<cv::StereoSGBM> sgbm_l_, sgbm_r_;
+  cv::Mat l8_, r8_, l8f_, r8f_, d16_, d16r_, sgbm_, sgbm_right_;
+  cv::Mat disp_, sigma_;
+  // Per pixel: the Gauss-Newton state (disparity, gain, offset, last step times gain, residual
+  // variance, noise correlation factor, window count, (A^-1)_cc) and the window sums
+  // (channel-major planes of w * h).
+  std::vector<float> d_, a_, b_, c_, s2_, kappa_px_, n_, z_;
+  std::vector<float> chan_, sums_, line_;
+  std::vector<float> scratch_, line_copy_;
+  std::vector<double> acc_;
+  double mean_ = 0;
+  std::vector<float> rho_;  // the residual's autocorrelation over lags [-2, 2]^2
+  double residual_sigma_ = 0, kappa_ = 1;
+};
+
+}  // namespace naneye::recon::scene

@@ -1,0 +1,227 @@
+// The rectified matcher's sub-pixel step and its noise correlation (dense_match.hpp).
+//
+// Model per pixel p, over its window: L(x) = a R(x - d_x) + b, each window pixel x at its own current
+// disparity d_x, linearised in a common step: R(x - d_x - delta) ~ W_x - G_x delta (W the right image
+// sampled there, G its x derivative). With c = a delta the model is linear in (a, b, c): regressors
+// W, 1, -G. Eliminating b by centring (window means), the normal equations are 2 x 2:
+//   [Sww  -Swg] [a]   [ Swl]
+//   [-Swg  Sgg] [c] = [-Sgl],   S.. the centred window sums (Gauss-Newton, e.g. Baker & Matthews 2004).
+// Every sum is a box filter of a per-pixel product, so the cost per pixel does not depend on the
+// window. Var(c) = s^2 (A^-1)_cc with s^2 = SSR / (N - 3); delta = c / a, so sigma_d = sigma_c / a.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "naneye/recon/scene/dense_match.hpp"
+
+namespace naneye::recon::scene {
+namespace {
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
+constexpr int kLag = 2;        // px; the noise autocorrelation's reach (bilinear + binomial: 2)
+
+// Sum over the (2r+1)^2 window (zero outside the image), separable running sums in double.
+void box_sum(const float* in, float* out, float* tmp, double* acc, int w, int h, int r) {
+  std::fill(acc, acc + w, 0.0);
+  for (int y = 0; y < std::min(r, h); ++y)
+    for (int x = 0; x < w; ++x) acc[x] += in[static_cast<std::size_t>(y) * w + x];
+  for (int y = 0; y < h; ++y) {
+    if (y + r < h) {
+      const float* add = in + static_cast<std::size_t>(y + r) * w;
+      for (int x = 0; x < w; ++x) acc[x] += add[x];
+    }
+    if (y - r - 1 >= 0) {
+      const float* sub = in + static_cast<std::size_t>(y - r - 1) * w;
+      for (int x = 0; x < w; ++x) acc[x] -= sub[x];
+    }
+    float* t = tmp + static_cast<std::size_t>(y) * w;
+    for (int x = 0; x < w; ++x) t[x] = static_cast<float>(acc[x]);
+  }
+  for (int y = 0; y < h; ++y) {
+    const float* t = tmp + static_cast<std::size_t>(y) * w;
+    float* o = out + static_cast<std::size_t>(y) * w;
+    double s = 0;
+    for (int x = 0; x < std::min(r, w); ++x) s += t[x];
+    for (int x = 0; x < w; ++x) {
+      if (x + r < w) s += t[x + r];
+      if (x - r - 1 >= 0) s -= t[x - r - 1];
+      o[x] = static_cast<float>(s);
+    }
+  }
+}
+
+// Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
+// from tap 0, for taps -1, 0, 1, 2.
+inline void keys(float t, float w[4], float dw[4]) {
+  const float t2 = t * t, t3 = t2 * t;
+  w[0] = -0.5f * t3 + t2 - 0.5f * t;
+  w[1] = 1.5f * t3 - 2.5f * t2 + 1;
+  w[2] = -1.5f * t3 + 2 * t2 + 0.5f * t;
+  w[3] = 0.5f * t3 - 0.5f * t2;
+  dw[0] = -1.5f * t2 + 2 * t - 0.5f;
+  dw[1] = 4.5f * t2 - 5 * t;
+  dw[2] = -4.5f * t2 + 4 * t + 0.5f;
+  dw[3] = 1.5f * t2 - t;
+}
+}  // namespace
+
+void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  float* ch = chan_.data();
+  const float mu = static_cast<float>(mean_);
+  for (int y = 0; y < h_; ++y) {
+    const float* L = left.ptr<float>(y);
+    const float* R = right.ptr<float>(y);
+    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w_; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
+      float m = 0, W = 0, G = 0, l = 0;
+      const float d = d_[i];
+      if (std::isfinite(d)) {
+        const float xs = static_cast<float>(x) - d;
+        const int i0 = static_cast<int>(std::floor(xs));
+        if (i0 >= 1 && i0 + 2 < w_ && vr[i0 - 1] && vr[i0] && vr[i0 + 1] && vr[i0 + 2]) {
+          float wk[4], dk[4];
+          keys(xs - static_cast<float>(i0), wk, dk);
+          for (int k = 0; k < 4; ++k) {
+            W += wk[k] * (R[i0 - 1 + k] - mu);
+            G += dk[k] * (R[i0 - 1 + k] - mu);
+          }
+          l = L[x] - mu;
+          m = 1;
+        }
+      }
+      ch[0 * n + i] = m;
+      ch[1 * n + i] = m * W;
+      ch[2 * n + i] = m * l;
+      ch[3 * n + i] = m * G;
+      ch[4 * n + i] = m * W * W;
+      ch[5 * n + i] = m * G * G;
+      ch[6 * n + i] = m * W * G;
+      ch[7 * n + i] = m * W * l;
+      ch[8 * n + i] = m * G * l;
+      ch[9 * n + i] = m * l * l;
+    }
+  }
+  for (int k = 0; k < kChannels; ++k)
+    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+}
+
+void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                              const cv::Mat& valid_right) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  // Centre both images on the left's mean: the window sums stay small against float precision.
+  mean_ = cv::mean(left, valid_left)[0];
+  for (int y = 0; y < h_; ++y) {
+    const float* sg = sgbm_.ptr<float>(y);
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNan;
+  }
+  const float* S = sums_.data();
+  for (int it = 0; it < s_.iterations; ++it) {
+    gather(left, right, valid_right, it + 1 == s_.iterations);
+    for (std::size_t i = 0; i < n; ++i) {
+      const float N = S[i];
+      n_[i] = N;
+      if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
+        d_[i] = kNan;
+        continue;
+      }
+      const double inv = 1.0 / N;
+      const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
+      const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
+      const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
+      const double Sgl = S[8 * n + i] - sgr * sl * inv, Sll = S[9 * n + i] - sl * sl * inv;
+      const double det = Sww * Sgg - Swg * Swg;
+      if (!(det > 0)) {
+        d_[i] = kNan;
+        continue;
+      }
+      const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
+      a_[i] = static_cast<float>(a);
+      c_[i] = static_cast<float>(c);
+      b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
+      s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
+      z_[i] = static_cast<float>(Sww / det);
+      if (!(a > 0)) continue;  // anti-correlated: validate() refuses it
+      // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
+      d_[i] += static_cast<float>(std::clamp(c / a, -0.5, 0.5));
+    }
+  }
+  correlation(valid_left);
+}
+
+void RectifiedMatcher::correlation(const cv::Mat&) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  const float* ch = chan_.data();
+  const float* S = sums_.data();
+  // The last fit's residual at every pixel with data (its own window's a, b, c).
+  float* e = scratch_.data();
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (ch[i] > 0 && std::isfinite(d_[i])) line_copy_[m++] = s2_[i];
+  double med = 0;
+  if (m > 0) {
+    std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(m / 2),
+                     line_copy_.begin() + static_cast<long>(m));
+    med = line_copy_[m / 2];
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
+    // noise: left out of the autocorrelation.
+    const bool use = ch[i] > 0 && std::isfinite(d_[i]) && s2_[i] <= 3 * med;
+    e[i] = use ? a_[i] * ch[n + i] + b_[i] - c_[i] * ch[3 * n + i] - ch[2 * n + i] : 0.f;
+  }
+  double acc[2 * kLag + 1][2 * kLag + 1] = {};
+  for (int y = kLag; y < h_ - kLag; ++y)
+    for (int x = kLag; x < w_ - kLag; ++x) {
+      const float ei = e[static_cast<std::size_t>(y) * w_ + x];
+      if (ei == 0) continue;
+      for (int dy = -kLag; dy <= kLag; ++dy)
+        for (int dx = -kLag; dx <= kLag; ++dx)
+          acc[dy + kLag][dx + kLag] += ei * e[static_cast<std::size_t>(y + dy) * w_ + x + dx];
+    }
+  const double e0 = acc[kLag][kLag] > 0 ? acc[kLag][kLag] : 1.0;
+  for (int k = 0; k < 25; ++k) rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / 5][k % 5] / e0);
+  // kappa = sum_ij z_i z_j rho_ij / sum_i z_i^2 over the window, z the derivative regressor centred
+  // on the window: the variance of the sandwich estimate over the white-noise one.
+  float* z = chan_.data() + 4 * n;
+  float* hz = chan_.data() + 5 * n;
+  float* zz = chan_.data() + 6 * n;
+  float* zh = chan_.data() + 7 * n;
+  for (std::size_t i = 0; i < n; ++i)
+    z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f;
+  for (int y = 0; y < h_; ++y)
+    for (int x = 0; x < w_; ++x) {
+      double s = 0;
+      for (int dy = -kLag; dy <= kLag; ++dy) {
+        const int yy = y + dy;
+        if (yy < 0 || yy >= h_) continue;
+        for (int dx = -kLag; dx <= kLag; ++dx) {
+          const int xx = x + dx;
+          if (xx < 0 || xx >= w_) continue;
+          s += rho_[static_cast<std::size_t>((dy + kLag) * 5 + dx + kLag)] *
+               z[static_cast<std::size_t>(yy) * w_ + xx];
+        }
+      }
+      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
+      hz[i] = static_cast<float>(s);
+      zz[i] = z[i] * z[i];
+      zh[i] = z[i] * hz[i];
+    }
+  float* szz = sums_.data() + 6 * n;
+  float* szh = sums_.data() + 7 * n;
+  box_sum(zz, szz, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+  box_sum(zh, szh, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+  for (std::size_t i = 0; i < n; ++i) kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isfinite(d_[i]) && ch[i] > 0) line_copy_[k++] = kappa_px_[i];
+  if (k > 0) {
+    std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(k / 2),
+                     line_copy_.begin() + static_cast<long>(k));
+    kappa_ = line_copy_[k / 2];
+  }
+}
+
+}  // namespace naneye::recon::scene
