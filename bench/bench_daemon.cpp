@@ -1,7 +1,8 @@
 // naneyed's figures (printed, never asserted), on a temporally smooth rendered capture (the board
 // orbiting at ~70 mm, replayed at 62 fps: bench/smooth_capture.hpp) with the REAL processing step
 // (BoardReconstruction: corners, triangulation, board pose, P/D/R) and, as a second row, the
-// timing-only step (board.detect = false):
+// timing-only step (board.detect = false), then [recon] mode both (board + sparse + dense scene) on a
+// textured scene (the hand-held sphere, bench/smooth_capture.hpp) and on the board capture:
 //  - allocations per frame on the capture thread and on the reconstruction worker (in-process
 //    Pipeline, max-speed replay; every operator new counted per thread);
 //  - naneyed itself: capture-to-published latency p50/p99; requests/s on /v1/depth while streaming,

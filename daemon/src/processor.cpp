@@ -3,6 +3,8 @@
 #include <opencv2/core/utility.hpp>
 #include <optional>
 
+#include "naneye/recon/scene/dense.hpp"
+#include "naneye/recon/scene/scene_json.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 #include "naneye/recon/stereo_reconstructor.hpp"
 
@@ -68,7 +70,11 @@ class Reconstruction final : public PairProcessor {
     }
     // Built anew (its masks and rays depend on the rig): on a reload this runs on the caller's
     // thread (Pipeline::reload), never between two pairs of the worker.
-    if (scene_wanted_) sparse_.emplace(rig, sparse_settings_);
+    if (scene_wanted_) {
+      sparse_.emplace(rig, sparse_settings_);
+      dense_.emplace(rig);
+      map_pixels_ = static_cast<std::size_t>(rig.left.width()) * static_cast<std::size_t>(rig.left.height());
+    }
   }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
     fill_pair_identity(pair, out);
@@ -76,23 +82,33 @@ class Reconstruction final : public PairProcessor {
   }
   void process_pair(const driver::StereoPair& pair, recon::PairResult& out, SceneResult& scene,
                     recon::scene::DepthMap* depth) override {
-    (void)depth;
     process(pair, out);
     scene.clear();
     if (!sparse_) return;
+    // One demosaic and one luminance for both scene paths.
     sparse_->load_luma(image_view(pair.left), image_view(pair.right));
     sparse_->reconstruct(sparse_->luma(), scene.sparse);
     scene.computed = true;
+    if (dense_ && depth) {
+      dense_->reconstruct(sparse_->luma(), *depth);
+      scene.dense = true;
+      scene.depth = recon::scene::summarize(*depth);
+    }
   }
   bool scene() const override { return scene_wanted_; }
+  bool dense() const override { return scene_wanted_; }
   void reserve(SceneResult& scene, recon::scene::DepthMap* depth) const override {
-    (void)depth;
-    if (scene_wanted_) scene.sparse.points.reserve(static_cast<std::size_t>(sparse_settings_.max_features));
+    if (!scene_wanted_) return;
+    scene.sparse.points.reserve(static_cast<std::size_t>(sparse_settings_.max_features));
+    if (depth) {
+      depth->z_mm.reserve(map_pixels_);
+      depth->sigma_mm.reserve(map_pixels_);
+    }
   }
   std::string_view name() const override {
     if (!scene_wanted_) return "board reconstruction (corners, niter2 + refinement, board pose)";
-    if (!board_wanted_) return "scene reconstruction (sparse features)";
-    return "board and scene reconstruction (corners, board pose; sparse features)";
+    if (!board_wanted_) return "scene reconstruction (sparse features, dense depth map)";
+    return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
   }
 
  private:
@@ -101,6 +117,8 @@ class Reconstruction final : public PairProcessor {
   bool board_wanted_, scene_wanted_;
   std::optional<recon::StereoReconstructor> board_;
   std::optional<recon::scene::SparseReconstructor> sparse_;
+  std::optional<recon::scene::DenseReconstructor> dense_;
+  std::size_t map_pixels_ = 0;  // the left raw grid's, for the dense maps' capacity
 };
 
 }  // namespace

@@ -192,6 +192,9 @@ async function refreshFrame(eye) {
 }
 
 async function frameLoop() {
+  // Frames exist once a pair has been processed: asking before would only collect 503s (a slow
+  // source, e.g. the simulator rendering a textured scene, takes seconds for its first pair).
+  if (!view.latest) return setTimeout(frameLoop, FRAME_INTERVAL_MS);
   try {
     const [pl] = await Promise.all([refreshFrame("left"), refreshFrame("right"), refreshDepth()]);
     if (pl !== null) view.framesPair = Number(pl);

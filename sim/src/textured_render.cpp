@@ -55,7 +55,8 @@ struct FastWaves {
 FastWaves fast_waves(const std::vector<Wave3>& w) {
   FastWaves f;
   const std::size_t n = (w.size() + FastWaves::kBlock - 1) / FastWaves::kBlock * FastWaves::kBlock;
-  f.kx.assign(n, 0.f), f.ky.assign(n, 0.f), f.kz.assign(n, 0.f), f.phase.assign(n, 0.f), f.weight.assign(n, 0.f);
+  f.kx.assign(n, 0.f), f.ky.assign(n, 0.f), f.kz.assign(n, 0.f), f.phase.assign(n, 0.f),
+      f.weight.assign(n, 0.f);
   for (std::size_t i = 0; i < w.size(); ++i) {
     f.kx[i] = static_cast<float>(w[i].k.x()), f.ky[i] = static_cast<float>(w[i].k.y());
     f.kz[i] = static_cast<float>(w[i].k.z()), f.phase[i] = static_cast<float>(w[i].phase), f.weight[i] = 1.f;
@@ -76,7 +77,9 @@ inline float fast_cos(float a) {
   const float c = far ? 3.14159265358979f - y : y;
   const float c2 = c * c;
   const float p =
-      1.f + c2 * (-0.5f + c2 * (1.f / 24 + c2 * (-1.f / 720 + c2 * (1.f / 40320 + c2 * (-1.f / 3628800 + c2 * (1.f / 479001600))))));
+      1.f +
+      c2 * (-0.5f + c2 * (1.f / 24 + c2 * (-1.f / 720 + c2 * (1.f / 40320 + c2 * (-1.f / 3628800 +
+                                                                                  c2 * (1.f / 479001600))))));
   return far ? -p : p;
 }
 
@@ -134,7 +137,8 @@ TexturedRenderer::Rays TexturedRenderer::build(const recon::CameraModel& cam) co
   return r;
 }
 
-void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, cv::Mat& out, bool fast) const {
+void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, cv::Mat& out,
+                                  bool fast) const {
   out.create(kSize, kSize, CV_32FC1);
   const auto waves = texture_waves(scene.texture);
   const FastWaves fw = fast_waves(waves);
@@ -159,7 +163,8 @@ void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, c
         const double d2 = l.squaredNorm();
         const double cos_i = std::abs(scene.surface.normal(X).dot(l)) / std::sqrt(d2);
         const Eigen::Vector3d local = scene.surface.to_local(X);
-        const double rho = fast ? fast_reflectance(fw, scene.texture, local) : reflectance(waves, scene.texture, local);
+        const double rho =
+            fast ? fast_reflectance(fw, scene.texture, local) : reflectance(waves, scene.texture, local);
         sum += rho * cos_i * ref2 / d2;
       }
       dst[col] = static_cast<float>(sum / nn * (sensor_.vignetting ? rt.cos4[p] : 1.0f));

@@ -198,7 +198,12 @@ try {
     }, 5000);
     check("the depth and sigma under the pointer come from the dense map", under !== null, under || "");
   }
-  if (screenshots) await scenePage.screenshot({ path: join(screenshots, "viewer-scene.png"), fullPage: true });
+  if (screenshots) {
+    // A few pairs in, so that the health panel has rates to show.
+    await until("rates", () => scenePage.evaluate(() => (window.naneyeViewer.view.status?.fps.left ?? 0) > 0), 20000);
+    await sleep(1500);
+    await scenePage.screenshot({ path: join(screenshots, "viewer-scene.png"), fullPage: true });
+  }
   check("no console errors on the scene", sceneErrors.length === 0, sceneErrors.join(" | "));
   check("no request leaves the daemon on the scene", sceneForeign.length === 0, sceneForeign.join(" "));
 } catch (e) {

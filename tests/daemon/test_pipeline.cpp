@@ -6,10 +6,10 @@
 #include <thread>
 
 #include "capture.hpp"
-#include "scene_capture.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
+#include "scene_capture.hpp"
 #include "temp_dir.hpp"
 
 using namespace naneye;
@@ -139,7 +139,8 @@ TEST(Pipeline, SceneResultsAndTheirMapsBelongToTheirPair) {
   pipeline.start();
   std::thread a(reader), b(reader);
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (pipeline.pairs_processed() < static_cast<std::uint64_t>(n) && std::chrono::steady_clock::now() < until)
+  while (pipeline.pairs_processed() < static_cast<std::uint64_t>(n) &&
+         std::chrono::steady_clock::now() < until)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   done.store(true);
   a.join();

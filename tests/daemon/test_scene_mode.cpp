@@ -1,6 +1,6 @@
-// [recon] mode scene / both in-process (issue 14): the processor runs the sparse path on the pair
-// beside the board, its points hold against the rendered truth, the result JSON carries the scene
-// object, and once warm a pair allocates nothing (mono and Bayer).
+// [recon] mode scene / both in-process (issue 14): the processor runs the sparse and dense paths on
+// the pair beside the board, its points hold against the rendered truth, the result JSON carries the
+// scene object, and once warm a pair allocates nothing (mono and Bayer, dense map included).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -32,9 +32,22 @@ TEST(SceneMode, SparsePointsHoldAgainstTheTruthBesideTheBoard) {
   const auto pair = scene_pair(2, false);
   recon::PairResult board;
   daemon::SceneResult out;
-  proc->reserve(out, nullptr);
-  proc->process_pair(pair, board, out, nullptr);
+  recon::scene::DepthMap map;
+  ASSERT_TRUE(proc->dense());
+  proc->reserve(out, &map);
+  proc->process_pair(pair, board, out, &map);
   EXPECT_EQ(board.pair, 2u);
+  // The dense map's summary is the map's own, and the map has depth only where the truth has one.
+  ASSERT_TRUE(out.dense);
+  EXPECT_EQ(out.depth.valid_count, map.valid_count);
+  EXPECT_EQ(out.depth.visible_count, map.visible_count);
+  EXPECT_GT(map.valid_count, 0);
+  int no_truth = 0;
+  for (int v = 0; v < map.height; ++v)
+    for (int u = 0; u < map.width; ++u)
+      if (std::isfinite(map.z_at(u, v)))
+        no_truth += !scene_renderer(false).truth_depth_at(scene.surface, Eigen::Vector2d(u, v)).has_value();
+  EXPECT_LE(no_truth, map.valid_count / 100) << "depths where the truth has none (issue 14: <= 1 %)";
   EXPECT_FALSE(board.board_found);  // a sphere, no board: the board half says so
   ASSERT_TRUE(out.computed);
   EXPECT_GE(out.sparse.valid_count, 300);
@@ -109,15 +122,18 @@ TEST(SceneMode, AllocatesNothingPerPairOnceWarmMonoAndBayer) {
     for (int k = 0; k < 3; ++k) pairs.push_back(scene_pair(k, bayer));
     recon::PairResult board;
     daemon::SceneResult out;
-    proc->reserve(out, nullptr);
-    proc->process_pair(pairs[0], board, out, nullptr);  // warm-up (lazily built state)
+    recon::scene::DepthMap map;
+    proc->reserve(out, &map);
+    proc->process_pair(pairs[0], board, out, &map);  // warm-up (lazily built state)
     long worst = 0;
     int valid = 0;
     for (std::size_t k = 1; k < pairs.size(); ++k) {
       const long before = naneye::test::heap_allocations();
-      proc->process_pair(pairs[k], board, out, nullptr);
+      proc->process_pair(pairs[k], board, out, &map);
       worst = std::max(worst, naneye::test::heap_allocations() - before);
       valid += out.sparse.valid_count;
+      EXPECT_TRUE(out.dense);
+      EXPECT_GT(map.valid_count, 0);
     }
     EXPECT_EQ(worst, 0) << (bayer ? "Bayer" : "mono");
     EXPECT_GT(valid, 2 * 300) << (bayer ? "Bayer" : "mono");  // the pairs were really reconstructed

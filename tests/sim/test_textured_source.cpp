@@ -99,7 +99,9 @@ TEST(TexturedSimSource, HandHeldCameraMovesSlowlyAndKeepsTheScenesInRange) {
           }
       EXPECT_GT(n, 800) << name << " t " << t;
       EXPECT_GE(lo, 8.0) << name << " t " << t;
-      EXPECT_LE(hi, 81.0) << name << " t " << t;
+      // The tube is closed at 80 mm (80.3 along a ray off its axis); the hand moves the camera up to
+      // 10 % of its 10 mm scale (1 mm) back from it, and turns it by up to 3 deg: 81.8 mm at most.
+      EXPECT_LE(hi, 81.8) << name << " t " << t;
     }
   }
 }
