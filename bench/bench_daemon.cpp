@@ -1,7 +1,8 @@
 // naneyed's figures (printed, never asserted), on a temporally smooth rendered capture (the board
 // orbiting at ~70 mm, replayed at 62 fps: bench/smooth_capture.hpp) with the REAL processing step
 // (BoardReconstruction: corners, triangulation, board pose, P/D/R) and, as a second row, the
-// timing-only step (board.detect = false):
+// timing-only step (board.detect = false), then [recon] mode both (board + sparse + dense scene) on a
+// textured scene (the hand-held sphere, bench/smooth_capture.hpp) and on the board capture:
 //  - allocations per frame on the capture thread and on the reconstruction worker (in-process
 //    Pipeline, max-speed replay; every operator new counted per thread);
 //  - naneyed itself: capture-to-published latency p50/p99; requests/s on /v1/depth while streaming,
@@ -105,7 +106,20 @@ class TaggingProcessor final : public daemon::PairProcessor {
     inner_->process(pair, out);
     found += out.board_found;
   }
+  void process_pair(const driver::StereoPair& pair, recon::PairResult& out, daemon::SceneResult& scene,
+                    recon::scene::DepthMap* depth) override {
+    worker_slot.store(thread_slot(), std::memory_order_relaxed);
+    inner_->process_pair(pair, out, scene, depth);
+    found += out.board_found;
+    scene_valid += scene.sparse.valid_count;
+  }
+  bool scene() const override { return inner_->scene(); }
+  bool dense() const override { return inner_->dense(); }
+  void reserve(daemon::SceneResult& scene, recon::scene::DepthMap* depth) const override {
+    inner_->reserve(scene, depth);
+  }
   std::string_view name() const override { return inner_->name(); }
+  std::atomic<long> scene_valid{0};
   std::atomic<int> worker_slot{-1};
   std::atomic<int> found{0};
 
@@ -119,10 +133,12 @@ std::array<std::uint64_t, kSlots> slot_counts() {
   return c;
 }
 
-void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool detect) {
+void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool detect,
+                           daemon::ReconMode mode = daemon::ReconMode::board, const char* what = nullptr) {
   daemon::Settings settings;
   settings.history = 64;
   settings.detect = detect;
+  settings.recon_mode = mode;
   auto tagging = std::make_unique<TaggingProcessor>(daemon::make_processor(settings));
   TaggingProcessor& tag = *tagging;
   daemon::Pipeline pipeline(settings, std::move(tagging), daemon::driver_source_factory(),
@@ -137,6 +153,7 @@ void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool
   wait_for(warm);
   const auto c0 = slot_counts();
   const int found0 = tag.found.load();
+  const long scene0 = tag.scene_valid.load();
   const auto t0 = std::chrono::steady_clock::now();
   wait_for(static_cast<std::uint64_t>(pairs));
   const auto c1 = slot_counts();
@@ -153,10 +170,13 @@ void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool
   }
   std::printf(
       "%-40s allocations per frame: recon worker %.2f, capture thread %.2f (%.0f pairs after %llu warm-up, "
-      "%d with a board); max-speed replay %.0f pairs/s\n",
-      detect ? "in-process Pipeline, BoardReconstruction:" : "in-process Pipeline, timing only:",
+      "%d with a board, %.0f valid scene points per pair); max-speed replay %.0f pairs/s\n",
+      what     ? what
+      : detect ? "in-process Pipeline, BoardReconstruction:"
+               : "in-process Pipeline, timing only:",
       static_cast<double>(in_worker) / n, static_cast<double>(in_others) / n, n,
-      static_cast<unsigned long long>(warm), tag.found.load() - found0, n / s);
+      static_cast<unsigned long long>(warm), tag.found.load() - found0,
+      static_cast<double>(tag.scene_valid.load() - scene0) / n, n / s);
   pipeline.stop();
 }
 
@@ -248,12 +268,15 @@ double metric(httplib::Client& c, const std::string& name) {
 }
 
 void service_figures(const std::filesystem::path& dir, const std::filesystem::path& capture, double seconds,
-                     int connections, bool detect) {
+                     int connections, bool detect, daemon::ReconMode mode = daemon::ReconMode::board,
+                     const char* what = nullptr) {
   const auto log = dir / "naneyed.log";
   const auto config = dir / "naneyed.toml";
-  std::ofstream(config) << "[board]\ndetect = " << (detect ? "true" : "false") << "\n";
-  std::printf("-- naneyed, %s\n", detect ? "board reconstruction (the real processing step)"
-                                         : "timing only (board.detect = false)");
+  std::ofstream(config) << "[board]\ndetect = " << (detect ? "true" : "false") << "\n[recon]\nmode = \""
+                        << daemon::to_string(mode) << "\"\n";
+  std::printf("-- naneyed, %s\n", what     ? what
+                                  : detect ? "board reconstruction (the real processing step)"
+                                           : "timing only (board.detect = false)");
   std::vector<std::string> args{
       NANEYED_PATH,  "--config", config.string(),
       "--calib",     kCalib,     "--listen",
@@ -302,8 +325,14 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   const long rss_before = rss_kb(child.pid, "VmRSS:");
   if (auto d = c.Get("/v1/depth"); d && d->status == 200) {
     const auto j = nlohmann::json::parse(d->body);
-    std::printf("latest /v1/depth: pair %lld, board_found %s, %zu bytes\n", j["pair"].get<long long>(),
-                j["board_found"].get<bool>() ? "true" : "false", d->body.size());
+    std::printf("latest /v1/depth: pair %lld, board_found %s, %s, %zu bytes\n", j["pair"].get<long long>(),
+                j["board_found"].get<bool>() ? "true" : "false",
+                j.contains("scene")
+                    ? (std::to_string(j["scene"]["valid_points"].get<int>()) + " valid scene points" +
+                       (j["scene"]["depth"].is_null() ? ", no dense map" : ", a dense map"))
+                          .c_str()
+                    : "no scene",
+                d->body.size());
   }
 
   // Phase 2: keep-alive connections hammering /v1/depth while it streams. The rate is given as the
@@ -377,10 +406,22 @@ int main(int argc, char** argv) {
   std::printf(
       "capture: %d pairs of the sim 'orbit' sequence (paper-d3, ~70 mm), 62 fps, forwards then back\n",
       pairs);
+  // A textured scene (issue 14) along the hand-held trajectory, for [recon] mode scene / both.
+  const auto scene_capture = dir.path / "scene.raw";
+  const int scene_pairs = bench::write_scene_capture(scene_capture, "sphere", rendered / 2, 62.0);
+  std::printf(
+      "scene capture: %d pairs of the textured 'sphere' (12-20 mm), hand-held, 62 fps, forwards then back\n",
+      scene_pairs);
   allocations_per_frame(capture, pairs, true);
   allocations_per_frame(capture, pairs, false);
+  allocations_per_frame(scene_capture, std::min(scene_pairs, 60), true, daemon::ReconMode::both,
+                        "in-process Pipeline, board + scene:");
   serialization_cost();
   service_figures(dir.path, capture, seconds, connections, true);
   service_figures(dir.path, capture, seconds, connections, false);
+  service_figures(dir.path, scene_capture, seconds, connections, true, daemon::ReconMode::both,
+                  "board + scene ([recon] mode = \"both\") on the textured sphere");
+  service_figures(dir.path, capture, seconds, connections, true, daemon::ReconMode::both,
+                  "board + scene ([recon] mode = \"both\") on the board capture");
   return 0;
 }

@@ -1,5 +1,6 @@
 #pragma once
-// The "scene" object of issue 14 for one pair's sparse reconstruction (docs/scene.md):
+// The "scene" object of issue 14 for one pair (docs/scene.md), by the serializer naneyed uses too
+// (recon/scene/scene_json.hpp):
 // {"points": [{"id", "left_px", "right_px", "xyz_mm", "depth_sigma_mm", "valid", "status"}],
 //  "depth": {"valid_share", "median_mm", "valid_pixels", "visible_pixels"} of the dense map, or null
 //  without one}.

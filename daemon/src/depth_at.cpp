@@ -86,4 +86,28 @@ DepthAt depth_at(const recon::CameraModel& left, const recon::PairResult& result
   return out;
 }
 
+DenseDepthAt dense_depth_at(const recon::CameraModel& left, const recon::scene::DepthMap& map,
+                            const Eigen::Vector2d& px) {
+  DenseDepthAt out;
+  out.map_u = std::clamp(static_cast<int>(std::lround(px.x())), 0, std::max(0, map.width - 1));
+  out.map_v = std::clamp(static_cast<int>(std::lround(px.y())), 0, std::max(0, map.height - 1));
+  const auto u = left.undistort(Eigen::Vector2d(out.map_u, out.map_v));
+  if (!u.ok()) {
+    out.status = u.status == recon::UndistortStatus::outside_model ? DenseAtStatus::outside_model
+                                                                   : DenseAtStatus::no_convergence;
+    return out;
+  }
+  if (map.width <= 0 || map.height <= 0 || map.z_mm.size() < static_cast<std::size_t>(map.width) * map.height)
+    return out;
+  const float z = map.z_at(out.map_u, out.map_v);
+  const float sigma = map.sigma_at(out.map_u, out.map_v);
+  if (!std::isfinite(z) || !std::isfinite(sigma)) return out;
+  out.depth_mm = z;
+  out.depth_sigma_mm = sigma;
+  out.xyz_mm = Eigen::Vector3d(u.normalized.x(), u.normalized.y(), 1.0) * static_cast<double>(z);
+  out.range_mm = out.xyz_mm.norm();
+  out.status = DenseAtStatus::ok;
+  return out;
+}
+
 }  // namespace naneye::daemon

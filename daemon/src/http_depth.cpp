@@ -59,12 +59,44 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
     }
     nlohmann::json body;
     DepthAt d;
-    const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t) {
+    DenseDepthAt dense;
+    bool has_dense = false, map_held = false;
+    const bool have = read_latest_with_map(*ctx.pipeline, [&](const Published& p, const DepthSlot* map) {
+      has_dense = p.scene.dense;
+      map_held = map != nullptr;
+      if (map) dense = dense_depth_at(cam, map->map, {*u, *v});
       d = depth_at(cam, p.result, {*u, *v});
       body["pair"] = p.result.pair;
       body["age_ms"] = age_ms(p);
     });
     if (!have) return no_result(res);
+    if (has_dense && !map_held) {
+      // Overtaken by newer maps between reading the result and its map: never another pair's map.
+      return send_error(res, 503, "depth_map_gone", "the latest result's dense map was replaced; retry");
+    }
+    body["u"] = *u;
+    body["v"] = *v;
+    if (has_dense) {
+      if (dense.status == DenseAtStatus::outside_model)
+        return send_error(res, 422, "outside_model",
+                          "the pixel lies beyond the fold of the distortion model: no ray maps to it");
+      if (dense.status == DenseAtStatus::ok) {
+        body["source"] = "dense";
+        body["map_px"] = {dense.map_u, dense.map_v};
+        body["xyz_mm"] = {dense.xyz_mm.x(), dense.xyz_mm.y(), dense.xyz_mm.z()};
+        body["depth_mm"] = dense.depth_mm;
+        body["depth_sigma_mm"] = dense.depth_sigma_mm;
+        body["range_mm"] = dense.range_mm;
+        return send_json(res, body);
+      }
+      // No trusted dense depth at this pixel: the board plane of the same pair answers if it can.
+      if (d.status != DepthAtStatus::ok)
+        return send_error(res, 422, "no_depth",
+                          std::string("the dense map has no trusted depth at this pixel (no texture, "
+                                      "occluded, inconsistent or unseen by the right eye) and the board "
+                                      "plane gives none: ") +
+                              to_string(d.status));
+    }
     switch (d.status) {
       case DepthAtStatus::ok:
         break;
@@ -79,8 +111,7 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
         return send_error(res, 422, "off_board",
                           std::string("the pixel's ray does not meet the board: ") + to_string(d.status));
     }
-    body["u"] = *u;
-    body["v"] = *v;
+    body["source"] = "board_plane";
     body["xyz_mm"] = {d.xyz_mm.x(), d.xyz_mm.y(), d.xyz_mm.z()};
     body["depth_mm"] = d.depth_mm;
     body["depth_sigma_mm"] = d.depth_sigma_mm;
@@ -117,28 +148,38 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
   svr.Get("/v1/points.ply", [&ctx](const httplib::Request& req, httplib::Response& res) {
     if (!only_params(req, res, {"which"})) return;
     const std::string which = req.has_param("which") ? req.get_param_value("which") : "triangulated";
-    if (which != "triangulated" && which != "board") {
+    if (which != "triangulated" && which != "board" && which != "scene" && which != "all") {
       return send_error(res, 400, "bad_parameter",
-                        "which must be triangulated or board, got \"" + which + "\"");
+                        "which must be triangulated, board, scene or all, got \"" + which + "\"");
     }
+    const bool corners = which != "scene", scene = which == "scene" || which == "all";
     std::ostringstream vertices;
     vertices.precision(9);
     int count = 0;
     std::uint64_t pair = 0;
     const bool have = ctx.pipeline->results().read_latest([&](const Published& p, std::uint64_t) {
       pair = p.result.pair;
-      for (int i = 0; i < p.result.point_count; ++i) {
+      for (int i = 0; corners && i < p.result.point_count; ++i) {
         const auto& pt = p.result.points[static_cast<std::size_t>(i)];
         if (!pt.valid) continue;
         const Eigen::Vector3d& x = which == "board" ? pt.xyz_board_mm : pt.xyz_mm;
         vertices << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
         ++count;
       }
+      for (std::size_t i = 0; scene && p.scene.computed && i < p.scene.sparse.points.size(); ++i) {
+        const auto& pt = p.scene.sparse.points[i];
+        if (!pt.valid()) continue;
+        vertices << pt.X.x() << ' ' << pt.X.y() << ' ' << pt.X.z() << '\n';
+        ++count;
+      }
     });
     if (!have) return no_result(res);
     std::ostringstream ply;
-    ply << "ply\nformat ascii 1.0\ncomment naneye pair " << pair << ", " << which
-        << " corners, left camera frame, millimetres\nelement vertex " << count
+    ply << "ply\nformat ascii 1.0\ncomment naneye pair " << pair << ", "
+        << (which == "scene" ? "valid scene points"
+            : which == "all" ? "triangulated corners and scene points"
+                             : which + " corners")
+        << ", left camera frame, millimetres\nelement vertex " << count
         << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
         << vertices.str();
     res.set_header("Content-Disposition", "inline; filename=\"naneye-" + std::to_string(pair) + ".ply\"");

@@ -42,7 +42,7 @@ bool int_param(const httplib::Request& req, httplib::Response& res, const char* 
 bool double_param(const httplib::Request& req, httplib::Response& res, const char* name,
                   std::optional<double>& out);
 
-// result_to_json(p.result).dump(), serialized once per result for every HTTP thread. nlohmann sorts
+// result_to_json(p.result, p.scene).dump(), serialized once per result for every HTTP thread. nlohmann sorts
 // keys, so a caller splices "age_ms" (the first key) in after the opening brace.
 std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Published& p);
 // Appends that text to `out` with "age_ms" (formatted as nlohmann formats a double) as its first key.
@@ -51,10 +51,26 @@ void append_with_age(std::string& out, double age_ms, const std::string& result_
 nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s);
 std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s);
 
-void add_status_routes(httplib::Server& svr, HttpContext& ctx);  // status, healthz, readyz, metrics
-void add_depth_routes(httplib::Server& svr, HttpContext& ctx);   // depth, depth/at, points, points.ply
-void add_frame_routes(httplib::Server& svr, HttpContext& ctx);   // frames/left.png, right.png
-void add_event_routes(httplib::Server& svr, HttpContext& ctx);   // events (SSE)
-void add_web_routes(httplib::Server& svr);                       // the viewer: /, /web/*
+void add_status_routes(httplib::Server& svr, HttpContext& ctx);     // status, healthz, readyz, metrics
+void add_depth_routes(httplib::Server& svr, HttpContext& ctx);      // depth, depth/at, points, points.ply
+void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx);  // depth.png, depth/colour.png
+
+// Calls fn(result, map) on the latest result and, when it has a dense map still held, that map
+// (nullptr otherwise), both pinned for the call. False before the first result.
+template <typename Fn>
+bool read_latest_with_map(const Pipeline& pipeline, Fn&& fn) {
+  return pipeline.results().read_latest([&](const Published& p, std::uint64_t seq) {
+    const DepthSlot* map = nullptr;
+    if (p.scene.dense)
+      pipeline.depth_maps().read_seq(seq, [&](const DepthSlot& d) {
+        map = &d;
+        fn(p, map);
+      });
+    if (!map) fn(p, static_cast<const DepthSlot*>(nullptr));
+  });
+}
+void add_frame_routes(httplib::Server& svr, HttpContext& ctx);  // frames/left.png, right.png
+void add_event_routes(httplib::Server& svr, HttpContext& ctx);  // events (SSE)
+void add_web_routes(httplib::Server& svr);                      // the viewer: /, /web/*
 
 }  // namespace naneye::daemon::http

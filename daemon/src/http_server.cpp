@@ -174,7 +174,7 @@ std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Publ
   if (local.text && local.seq == p.seq) return local.text;
   std::lock_guard lock(ctx.result_json_mutex);
   if (!ctx.result_json || ctx.result_json_seq != p.seq) {
-    auto text = std::make_shared<const std::string>(result_to_json(p.result).dump());
+    auto text = std::make_shared<const std::string>(result_to_json(p.result, p.scene).dump());
     // An event stream behind the latest result does not evict it.
     if (p.seq < ctx.result_json_seq) return text;
     ctx.result_json_seq = p.seq;
@@ -247,6 +247,7 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   });
   http::add_status_routes(*server_, *ctx_);
   http::add_depth_routes(*server_, *ctx_);
+  http::add_depth_map_routes(*server_, *ctx_);
   http::add_frame_routes(*server_, *ctx_);
   http::add_event_routes(*server_, *ctx_);
   http::add_web_routes(*server_);

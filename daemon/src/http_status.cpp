@@ -1,4 +1,6 @@
 // /v1/status, /healthz, /readyz.
+#include <cmath>
+
 #include "http_internal.hpp"
 
 namespace naneye::daemon::http {
@@ -12,6 +14,21 @@ nlohmann::json counters_json(const driver::SourceCounters& c) {
   nlohmann::json j = nlohmann::json::object();
   driver::for_each_counter(c, [&j](const char* name, const char*, std::uint64_t v) { j[name] = v; });
   return j;
+}
+
+nlohmann::json scene_json(const PipelineStatus& s) {
+  if (!s.scene) return nullptr;
+  nlohmann::json depth = nullptr;
+  if (const auto& d = s.scene->depth)
+    depth = {
+        {"valid_share", d->valid_share},
+        {"median_mm", std::isfinite(d->median_mm) ? nlohmann::json(d->median_mm) : nlohmann::json(nullptr)}};
+  return {{"features", s.scene->features},
+          {"valid_points", s.scene->valid_points},
+          {"noise_sigma_dn", s.scene->noise_sigma_dn},
+          {"depth", depth},
+          {"pairs", s.scene_pairs},
+          {"dense_pairs", s.dense_pairs}};
 }
 
 }  // namespace
@@ -49,6 +66,8 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
           {"last_result_age_ms",
            s.last_result_age_ms ? nlohmann::json(*s.last_result_age_ms) : nlohmann::json(nullptr)},
           {"processor", s.processor},
+          {"recon_mode", to_string(ctx.settings.recon_mode)},
+          {"scene", scene_json(s)},
           {"calibration",
            {{"files", calib_files},
             {"reloads", s.calibration_reloads},

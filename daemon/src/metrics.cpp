@@ -1,4 +1,5 @@
 // /metrics in the Prometheus text exposition format 0.0.4.
+#include <cmath>
 #include <sstream>
 
 #include "http_internal.hpp"
@@ -79,6 +80,27 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   }
   os << "# HELP naneye_build_info Version of the running naneyed.\n# TYPE naneye_build_info gauge\n"
      << "naneye_build_info{version=\"" << ctx.version << "\"} 1\n";
+  counter(os, "naneye_scene_pairs_total", "Pairs the scene path ran on ([recon] mode scene or both).",
+          s.scene_pairs);
+  counter(os, "naneye_scene_valid_points_total", "Valid sparse scene points, summed over those pairs.",
+          s.scene_valid_points);
+  counter(os, "naneye_scene_dense_pairs_total", "Pairs with a dense depth map.", s.dense_pairs);
+  if (s.scene) {
+    // Absent (not 0) without a scene result: a gauge of 0 points would read as "nothing seen".
+    gauge(os, "naneye_scene_features", "Sparse features tried on the latest pair.", s.scene->features);
+    gauge(os, "naneye_scene_valid_points", "Valid sparse scene points of the latest pair.",
+          s.scene->valid_points);
+    gauge(os, "naneye_scene_noise_sigma_dn", "Image noise the latest pair's left frame measured (DN).",
+          s.scene->noise_sigma_dn);
+    if (s.scene->depth) {
+      gauge(os, "naneye_scene_depth_valid_share",
+            "Share of the pixels both eyes see that have a dense depth (latest pair).",
+            s.scene->depth->valid_share);
+      if (std::isfinite(s.scene->depth->median_mm))
+        gauge(os, "naneye_scene_depth_median_mm", "Median dense depth of the latest pair (mm).",
+              s.scene->depth->median_mm);
+    }
+  }
   histogram(os, "naneye_recon_duration_seconds", "Time the processing step took per pair.", s.recon);
   histogram(os, "naneye_capture_to_publish_seconds",
             "From the arrival of a pair's last record to the publication of its result.",

@@ -46,8 +46,16 @@ Pipeline::Pipeline(const Settings& settings, std::unique_ptr<PairProcessor> proc
       rig_(std::move(rig)),
       results_(settings.history + 2),
       // A PNG encode pins a frame slot for a few ms; four slots keep the worker from ever skipping.
-      frames_(4) {
+      frames_(4),
+      // A PNG of the map pins a slot for a few ms, /v1/depth/at for microseconds; a result's map is
+      // looked up right after the result, so 4 slots keep it findable while pairs come at 62 fps.
+      depth_maps_(4) {
   processor_->set_rig(*rig_);
+  // Every buffer a result slot will hold, sized now: the worker then allocates nothing per pair.
+  results_.prepare([this](Published& p) { processor_->reserve(p.scene, nullptr); });
+  processor_->reserve(scratch_.scene, &depth_scratch_.map);
+  if (processor_->dense())
+    depth_maps_.prepare([this](DepthSlot& d) { processor_->reserve(scratch_.scene, &d.map); });
   rig_applied_ = rig_;
   processor_name_ = std::string(processor_->name());
 }
@@ -218,10 +226,24 @@ void Pipeline::handle(driver::PairPtr pair) {
   Published* slot = results_.begin_write();
   const bool publishable = slot != nullptr;
   if (!publishable) slot = &scratch_;
-  const std::int64_t t0 = monotonic_ns();
-  processor_->process(*pair, slot->result);
-  const std::int64_t t1 = monotonic_ns();
   const auto seq = processed_.load(std::memory_order_relaxed) + 1;
+  DepthSlot* depth = nullptr;
+  if (processor_->dense()) {
+    depth = depth_maps_.begin_write();
+    if (!depth) depth = &depth_scratch_;  // every map pinned: computed (it is part of the result), not held
+  }
+  const std::int64_t t0 = monotonic_ns();
+  processor_->process_pair(*pair, slot->result, slot->scene, depth ? &depth->map : nullptr);
+  const std::int64_t t1 = monotonic_ns();
+  if (depth && depth != &depth_scratch_) {
+    depth->seq = seq;
+    depth->pair = pair->index;
+    // Published before the result that refers to it: a reader of result `seq` finds its map.
+    if (slot->scene.dense)
+      depth_maps_.publish(seq);
+    else
+      depth_maps_.abandon();
+  }
   slot->seq = seq;
   slot->capture_ns = std::max(pair->left.host_ns, pair->right.host_ns);
   slot->recon_ns = t1 - t0;
@@ -232,6 +254,12 @@ void Pipeline::handle(driver::PairPtr pair) {
     skipped_.fetch_add(1, std::memory_order_relaxed);
   }
   processed_.store(seq, std::memory_order_relaxed);
+  if (slot->scene.computed) {
+    scene_pairs_.fetch_add(1, std::memory_order_relaxed);
+    scene_valid_points_.fetch_add(static_cast<std::uint64_t>(slot->scene.sparse.valid_count),
+                                  std::memory_order_relaxed);
+    if (slot->scene.dense) dense_pairs_.fetch_add(1, std::memory_order_relaxed);
+  }
   recon_latency_.record(t1 - t0);
   // host_ns is the arrival time on this host's monotonic clock; a replay that stamps recorded times
   // from another boot gives values that are not comparable, and those are left out.
@@ -299,7 +327,17 @@ PipelineStatus Pipeline::status() const {
   const std::int64_t now = monotonic_ns();
   results_.read_latest([&](const Published& p, std::uint64_t) {
     s.last_result_age_ms = static_cast<double>(now - p.published_ns) * 1e-6;
+    if (!p.scene.computed) return;
+    PipelineStatus::Scene sc;
+    sc.features = static_cast<int>(p.scene.sparse.points.size());
+    sc.valid_points = p.scene.sparse.valid_count;
+    sc.noise_sigma_dn = p.scene.sparse.noise_sigma_dn;
+    if (p.scene.dense) sc.depth = p.scene.depth;
+    s.scene = sc;
   });
+  s.scene_pairs = scene_pairs_.load(std::memory_order_relaxed);
+  s.scene_valid_points = scene_valid_points_.load(std::memory_order_relaxed);
+  s.dense_pairs = dense_pairs_.load(std::memory_order_relaxed);
   std::optional<driver::SourceState> src_state;
   {
     std::lock_guard lock(source_mu_);

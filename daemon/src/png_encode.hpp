@@ -8,7 +8,7 @@
 
 namespace naneye::daemon::http {
 
-// 8-bit gray (CV_8UC1) or BGR (CV_8UC3) -> PNG bytes; false on a libpng error.
+// 8-bit gray (CV_8UC1), BGR (CV_8UC3) or 16-bit gray (CV_16UC1) -> PNG bytes; false on a libpng error.
 bool encode_png(const cv::Mat& img, std::vector<std::uint8_t>& out);
 
 }  // namespace naneye::daemon::http

@@ -3,6 +3,9 @@
 #include <opencv2/core/utility.hpp>
 #include <optional>
 
+#include "naneye/recon/scene/dense.hpp"
+#include "naneye/recon/scene/scene_json.hpp"
+#include "naneye/recon/scene/sparse.hpp"
 #include "naneye/recon/stereo_reconstructor.hpp"
 
 namespace naneye::daemon {
@@ -48,28 +51,74 @@ class TimingOnly final : public PairProcessor {
   std::string_view name() const override { return "timing only (board.detect = false)"; }
 };
 
-// The product's processing step (issue #5): both eyes' corners, triangulation, board pose, P/D/R.
-class BoardReconstruction final : public PairProcessor {
+// The product's processing step: the board (issue #5: both eyes' corners, triangulation, board
+// pose, P/D/R) and/or the textured scene (issue 14: sparse points, the dense map), per [recon] mode.
+// Board and scene run on the same pair; the scene's two paths share one luminance.
+class Reconstruction final : public PairProcessor {
  public:
-  explicit BoardReconstruction(const Settings& s) : settings_(reconstructor_settings(s)) {}
+  explicit Reconstruction(const Settings& s)
+      : settings_(reconstructor_settings(s)),
+        board_wanted_(s.recon_mode != ReconMode::scene),
+        scene_wanted_(s.recon_mode != ReconMode::board) {}
 
   void set_rig(const recon::StereoRig& rig) override {
-    if (reconstructor_)
-      reconstructor_->set_rig(rig);
-    else
-      reconstructor_.emplace(rig, settings_);
+    if (board_wanted_) {
+      if (board_)
+        board_->set_rig(rig);
+      else
+        board_.emplace(rig, settings_);
+    }
+    // Built anew (its masks and rays depend on the rig): on a reload this runs on the caller's
+    // thread (Pipeline::reload), never between two pairs of the worker.
+    if (scene_wanted_) {
+      sparse_.emplace(rig, sparse_settings_);
+      dense_.emplace(rig);
+      map_pixels_ = static_cast<std::size_t>(rig.left.width()) * static_cast<std::size_t>(rig.left.height());
+    }
   }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
     fill_pair_identity(pair, out);
-    if (reconstructor_) reconstructor_->process(image_view(pair.left), image_view(pair.right), out);
+    if (board_) board_->process(image_view(pair.left), image_view(pair.right), out);
+  }
+  void process_pair(const driver::StereoPair& pair, recon::PairResult& out, SceneResult& scene,
+                    recon::scene::DepthMap* depth) override {
+    process(pair, out);
+    scene.clear();
+    if (!sparse_) return;
+    // One demosaic and one luminance for both scene paths.
+    sparse_->load_luma(image_view(pair.left), image_view(pair.right));
+    sparse_->reconstruct(sparse_->luma(), scene.sparse);
+    scene.computed = true;
+    if (dense_ && depth) {
+      dense_->reconstruct(sparse_->luma(), *depth);
+      scene.dense = true;
+      scene.depth = recon::scene::summarize(*depth);
+    }
+  }
+  bool scene() const override { return scene_wanted_; }
+  bool dense() const override { return scene_wanted_; }
+  void reserve(SceneResult& scene, recon::scene::DepthMap* depth) const override {
+    if (!scene_wanted_) return;
+    scene.sparse.points.reserve(static_cast<std::size_t>(sparse_settings_.max_features));
+    if (depth) {
+      depth->z_mm.reserve(map_pixels_);
+      depth->sigma_mm.reserve(map_pixels_);
+    }
   }
   std::string_view name() const override {
-    return "board reconstruction (corners, niter2 + refinement, board pose)";
+    if (!scene_wanted_) return "board reconstruction (corners, niter2 + refinement, board pose)";
+    if (!board_wanted_) return "scene reconstruction (sparse features, dense depth map)";
+    return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
   }
 
  private:
   recon::StereoReconstructorSettings settings_;
-  std::optional<recon::StereoReconstructor> reconstructor_;
+  recon::scene::SparseSettings sparse_settings_;
+  bool board_wanted_, scene_wanted_;
+  std::optional<recon::StereoReconstructor> board_;
+  std::optional<recon::scene::SparseReconstructor> sparse_;
+  std::optional<recon::scene::DenseReconstructor> dense_;
+  std::size_t map_pixels_ = 0;  // the left raw grid's, for the dense maps' capacity
 };
 
 }  // namespace
@@ -80,7 +129,7 @@ std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
   // idle) only takes the other core from the capture and HTTP threads: measured, it tripled naneyed's
   // time per pair on 2 cores (and its uninstrumented threads blind ThreadSanitizer).
   cv::setNumThreads(1);
-  return std::make_unique<BoardReconstruction>(settings);
+  return std::make_unique<Reconstruction>(settings);
 }
 
 }  // namespace naneye::daemon

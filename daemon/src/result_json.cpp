@@ -68,6 +68,14 @@ nlohmann::json result_to_json(const recon::PairResult& r) {
   return j;
 }
 
+nlohmann::json result_to_json(const recon::PairResult& r, const SceneResult& scene) {
+  nlohmann::json j = result_to_json(r);
+  if (scene.computed)
+    j["scene"] =
+        recon::scene::scene_to_json(scene.sparse, scene.dense ? std::optional(scene.depth) : std::nullopt);
+  return j;
+}
+
 recon::PairResult result_from_json(const nlohmann::json& j) {
   recon::PairResult r;
   r.pair = j.at("pair").get<std::uint64_t>();

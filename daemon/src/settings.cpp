@@ -99,6 +99,18 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
        [&s](const toml::node& n, const std::string& k) { s.square_mm = get_double(n, k, 0.01, 1000.0); }},
       {"board.tracking", [&s](const toml::node& n, const std::string& k) { s.tracking = get_bool(n, k); }},
       {"board.detect", [&s](const toml::node& n, const std::string& k) { s.detect = get_bool(n, k); }},
+      {"recon.mode",
+       [&s](const toml::node& n, const std::string& k) {
+         const auto v = get_string(n, k);
+         if (v == "board")
+           s.recon_mode = ReconMode::board;
+         else if (v == "scene")
+           s.recon_mode = ReconMode::scene;
+         else if (v == "both")
+           s.recon_mode = ReconMode::both;
+         else
+           fail(k, "expected one of board, scene, both, got \"" + v + "\"");
+       }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
       {"pipeline.sse_queue_depth", integer(s.sse_queue_depth, 2, 4096)},
@@ -132,6 +144,18 @@ void apply(const toml::table& table, const std::string& prefix, std::map<std::st
 }
 
 }  // namespace
+
+const char* to_string(ReconMode m) {
+  switch (m) {
+    case ReconMode::board:
+      return "board";
+    case ReconMode::scene:
+      return "scene";
+    case ReconMode::both:
+      return "both";
+  }
+  return "unknown";
+}
 
 Settings parse_settings(const std::string& toml_text, const std::filesystem::path& base_dir) {
   toml::table table;

@@ -15,6 +15,7 @@ const view = {
   status: null,
   connected: false,
   framesPair: null,    // pair of the frames shown
+  depthPair: null,     // pair of the depth map shown
   byPair: new Map(),   // the last results by pair number, so that an overlay matches its frame
   cloudFrom: null,     // the result the 3D view shows: the latest one with valid points
   sensor: { w: 250, h: 250 },
@@ -169,6 +170,14 @@ function drawOverlays() {
       g.strokeRect(x - 2, y - 2, 4, 4);
     }
   }
+  // The valid scene features over the depth map of the same pair (the map and its features agree).
+  const d = $("ov-depth").getContext("2d");
+  d.clearRect(0, 0, 250, 250);
+  const rd = view.byPair.get(view.depthPair);
+  if ($("overlay").checked && rd && rd.scene) {
+    d.strokeStyle = "rgba(255,255,255,0.8)";
+    for (const p of rd.scene.points) if (p.valid) d.strokeRect(p.left_px[0] - 1, p.left_px[1] - 1, 3, 3);
+  }
 }
 
 async function refreshFrame(eye) {
@@ -183,12 +192,13 @@ async function refreshFrame(eye) {
 }
 
 async function frameLoop() {
+  // Frames exist once a pair has been processed: asking before would only collect 503s (a slow
+  // source, e.g. the simulator rendering a textured scene, takes seconds for its first pair).
+  if (!view.latest) return setTimeout(frameLoop, FRAME_INTERVAL_MS);
   try {
     const [pl] = await Promise.all([refreshFrame("left"), refreshFrame("right"), refreshDepth()]);
-    if (pl !== null) {
-      view.framesPair = Number(pl);
-      drawOverlays();
-    }
+    if (pl !== null) view.framesPair = Number(pl);
+    drawOverlays();
   } catch (e) {
     // the daemon is away: the banner says so, the loop goes on
   }
@@ -199,18 +209,28 @@ async function frameLoop() {
 // Only asked for while the latest result carries a dense map (scene reconstruction on): no request the
 // daemon must refuse.
 async function refreshDepth() {
-  const dense = view.latest && view.latest.scene && view.latest.scene.depth;
+  const r = view.latest;
+  const dense = r && r.scene && r.scene.depth;
   const img = $("img-depth");
   $("dl-depth").hidden = !dense;
   if (!dense) {
-    $("depth-note").textContent =
-      "No dense depth map in the latest result (scene reconstruction off): the depth under the pointer comes from the board plane.";
+    $("depth-note").textContent = r && r.scene
+      ? "No dense depth map in the latest result: the depth under the pointer comes from the board plane."
+      : "No dense depth map in the latest result (scene reconstruction off): the depth under the pointer comes from the board plane.";
     img.hidden = true;
+    view.depthPair = null;
     return;
   }
   const res = await fetch("/v1/depth/colour.png", { cache: "no-store" });
-  if (!res.ok) return;
-  $("depth-note").textContent = "Depth on the left raw pixel grid; black: no depth.";
+  if (!res.ok) return;  // 503 while a newer map replaced this one: the next round fetches it
+  // The image is the map on the left raw grid with its scale bar (mm) below; the scale's ends are
+  // also given as headers (the 1st and 99th percentiles of this pair's depths).
+  const lo = res.headers.get("X-Naneye-Scale-Min-Mm"), hi = res.headers.get("X-Naneye-Scale-Max-Mm");
+  view.depthPair = Number(res.headers.get("X-Naneye-Pair"));
+  const share = (100 * dense.valid_share).toFixed(1);
+  const median = dense.median_mm === null ? "-" : `${dense.median_mm.toFixed(2)} mm`;
+  $("depth-note").textContent = `Pair ${view.depthPair}: depth on the left raw pixel grid, scale ${lo}-${hi} mm; ` +
+    `black: no depth. Depth at ${share} % of the pixels both eyes see, median ${median}.`;
   img.hidden = false;
   const url = URL.createObjectURL(await res.blob());
   const old = img.src;
@@ -229,9 +249,11 @@ function pointerDepth(e, el) {
     .then((res) => res.json())
     .then((j) => {
       const where = `(${u.toFixed(1)}, ${v.toFixed(1)})`;
+      const from = { dense: "dense map", board_plane: "board plane" }[j.source] || j.source;
       $("depth-at").textContent = j.error
         ? `${where}: ${j.error.replaceAll("_", " ")}`
-        : `${where}: ${j.depth_mm.toFixed(2)} mm ± ${j.depth_sigma_mm.toFixed(3)} mm` + (j.source ? ` (${j.source})` : " (board plane)");
+        : `${where}: ${j.depth_mm.toFixed(2)} mm ± ${j.depth_sigma_mm.toFixed(3)} mm (${from}, pair ${j.pair})`;
+      $("depth-at").dataset.source = j.source || "";
     })
     .catch(() => {})
     .finally(() => { depthAtPending = false; });

@@ -2,6 +2,7 @@
 #include "naneye/sim/sim_source.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <vector>
@@ -36,13 +37,20 @@ bool flag(const driver::SourceUri& uri, const char* name, bool fallback) {
 }  // namespace
 
 SimSourceOptions parse_sim_uri(const driver::SourceUri& uri) {
-  uri.allow_only(
-      {"fps", "motion", "seed", "bayer", "noise", "pairs", "speed", "color", "tolerance_ms", "reference"});
+  uri.allow_only({"fps", "motion", "seed", "bayer", "noise", "pairs", "speed", "color", "tolerance_ms",
+                  "reference", "supersample"});
   SimSourceOptions o;
   o.preset = uri.target.empty() ? "paper-d3" : uri.target;
-  if (!find_preset(o.preset))
-    throw driver::SourceError("sim: unknown preset '" + o.preset + "' (paper-d1, paper-d2, paper-d3)");
-  o.fps = number(uri, "fps", 50.0, 43.0, 62.0);
+  o.textured = textured_preset(o.preset).has_value();
+  if (!o.textured && !find_preset(o.preset))
+    throw driver::SourceError("sim: unknown preset '" + o.preset +
+                              "' (paper-d1, paper-d2, paper-d3; plane, plane-far, sphere, tube, height)");
+  // A textured scene's default rate is what its renderer holds in real time (sim_source.hpp).
+  o.fps = o.textured ? number(uri, "fps", 10.0, 1.0, 62.0) : number(uri, "fps", 50.0, 43.0, 62.0);
+  o.motion = o.textured ? Motion::handheld : Motion::orbit;
+  if (!o.textured && uri.param("supersample"))
+    throw driver::SourceError("sim: supersample is for the textured scenes only");
+  o.supersample = number(uri, "supersample", 1, 1, 3);
   if (const auto m = uri.param("motion")) {
     if (*m == "orbit")
       o.motion = Motion::orbit;
@@ -50,8 +58,15 @@ SimSourceOptions parse_sim_uri(const driver::SourceUri& uri) {
       o.motion = Motion::sweep;
     else if (*m == "still")
       o.motion = Motion::still;
+    else if (*m == "handheld")
+      o.motion = Motion::handheld;
     else
-      throw driver::SourceError("sim: motion=" + *m + " (orbit, sweep, still)");
+      throw driver::SourceError("sim: motion=" + *m + " (orbit, sweep, still, handheld)");
+    // Each trajectory belongs to one kind of scene: a board orbits or sweeps, a hand holds the
+    // camera over a textured surface (or keeps it still).
+    if (o.textured != (o.motion == Motion::handheld) && o.motion != Motion::still)
+      throw driver::SourceError("sim: motion=" + *m +
+                                (o.textured ? " is for the board presets" : " is for the textured scenes"));
   }
   o.seed = number<std::uint64_t>(uri, "seed", 1, 0, UINT64_MAX);
   o.bayer = flag(uri, "bayer", false);
@@ -85,6 +100,7 @@ Pose trajectory_pose(Motion m, const BoardGeometry& board, double distance_mm, d
       axis = 0.3;
       break;
     case Motion::still:
+    case Motion::handheld:  // a board is not held by hand here: treated as still
       tilt = 20 * deg;
       axis = 0.5;
       break;
@@ -108,6 +124,19 @@ SimSource::~SimSource() {
 }
 
 void SimSource::open() {
+  if (options_.textured) {
+    // The textured scenes are rendered through the paper's Dataset 3 rig, as in tests/scene.
+    recon::StereoRig rig;
+    try {
+      rig = recon::load_rig(find_calibration("paper-d3.yaml"));
+    } catch (const std::exception& e) {
+      throw driver::SourceError(std::string("sim: ") + e.what());
+    }
+    SensorSettings sensor = options_.noise ? SensorSettings{} : SensorSettings::ideal();
+    sensor.bayer = options_.bayer;
+    textured_ = std::make_unique<TexturedRenderer>(rig, sensor, options_.supersample);
+    return;
+  }
   const Preset preset = *find_preset(options_.preset);
   recon::StereoRig rig;
   try {
@@ -123,6 +152,7 @@ void SimSource::open() {
 }
 
 void SimSource::run() {
+  if (options_.textured) return run_textured();
   const Preset preset = *find_preset(options_.preset);
   Rng rng(options_.seed);
   TimingSettings timing;
@@ -154,6 +184,54 @@ void SimSource::run() {
                                                                        driver::kPixelCount),
                    0);
       writer.finish();  // hand the record over now: a live source never holds one back
+    }
+  }
+  end_of_stream(monotonic_ns());
+}
+
+void SimSource::run_textured() {
+  const TexturedSceneSettings scene = *textured_preset(options_.preset);
+  Rng rng(options_.seed);
+  TimingSettings timing;
+  // The simulated sensors run at the chosen rate (sim_source.hpp: below 43 fps for textured scenes).
+  timing.fps_start = options_.fps;
+  timing.fps_min = std::min(timing.fps_min, options_.fps);
+  timing.fps_max = std::max(options_.fps, std::min(timing.fps_max, options_.fps * 1.2));
+  timing.fps_step = std::min(timing.fps_step, 0.005 * options_.fps);
+  const std::uint64_t start_ticks = rng() % (std::uint64_t{1} << 32);
+  FrameClock clock(timing, start_ticks, rng);
+  RecordWriter writer([this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, monotonic_ns()); }, {},
+                      0, static_cast<std::uint8_t>(rng()));
+  cv::Mat left, right;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::uint64_t late = 0;
+  log()->info("sim://{}: textured scene, {} fps, camera {}", options_.preset, options_.fps,
+              options_.motion == Motion::handheld ? "hand-held" : "still");
+  for (std::uint64_t i = 0; options_.pairs == 0 || i < options_.pairs; ++i) {
+    if (stopping()) return;
+    const PairTime pt = clock.next(rng);
+    const double t = static_cast<double>(pt.left_ticks - start_ticks) / driver::kTickHz;
+    Pose camera;  // still: where the preset puts it
+    camera.t.setZero();
+    // The scale of the motion: the preset's own reference distance (10-55 mm).
+    if (options_.motion == Motion::handheld) camera = handheld_camera_pose(scene.light_reference_mm, t);
+    textured_->render_frames(seen_from(scene, camera), rng, left, right);
+    for (int eye = 0; eye < 2; ++eye) {
+      const std::uint64_t ticks = eye == 0 ? pt.left_ticks : pt.right_ticks;
+      if (options_.realtime) {
+        const auto due = t0 + std::chrono::nanoseconds(static_cast<std::int64_t>(
+                                  static_cast<double>(ticks - start_ticks) * 1e9 / driver::kTickHz));
+        if (std::chrono::steady_clock::now() > due + std::chrono::milliseconds(100) && late++ % 100 == 0)
+          log()->warn("sim://{}: rendering cannot hold {} fps in real time (pairs arrive late)",
+                      options_.preset, options_.fps);
+        if (!sleep_until(due)) return;
+      }
+      const cv::Mat& m = eye == 0 ? left : right;
+      writer.write(
+          eye == 0 ? driver::Sensor::left : driver::Sensor::right, static_cast<std::uint32_t>(ticks),
+          std::span<const std::uint16_t, driver::kPixelCount>(m.ptr<std::uint16_t>(), driver::kPixelCount),
+          0);
+      writer.finish();
     }
   }
   end_of_stream(monotonic_ns());

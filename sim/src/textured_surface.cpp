@@ -90,6 +90,15 @@ const char* to_string(SurfaceKind k) {
 }
 
 std::optional<double> Surface::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
+  // A rigid motion keeps the ray parameter t: intersect the ray moved into the surface's frame.
+  return intersect_local(to_local(o), pose_R.transpose() * d);
+}
+
+Eigen::Vector3d Surface::normal(const Eigen::Vector3d& X) const {
+  return pose_R * normal_local(to_local(X));
+}
+
+std::optional<double> Surface::intersect_local(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
   constexpr double kEps = 1e-9;
   double t = NAN;
   switch (kind) {
@@ -122,7 +131,7 @@ std::optional<double> Surface::intersect(const Eigen::Vector3d& o, const Eigen::
   return t;
 }
 
-Eigen::Vector3d Surface::normal(const Eigen::Vector3d& X) const {
+Eigen::Vector3d Surface::normal_local(const Eigen::Vector3d& X) const {
   switch (kind) {
     case SurfaceKind::plane:
       return axis;

@@ -1,5 +1,6 @@
 // The viewer in a real browser: Debian's chromium, headless, driven over the DevTools protocol by
-// puppeteer-core, against a real naneyed replaying the bundled capture. Run by ctest (viewer_browser):
+// puppeteer-core, against a real naneyed replaying the bundled capture, then against one running a
+// textured scene (sim://sphere, a hand-held camera; [recon] mode both). Run by ctest (viewer_browser):
 //   node tests/browser/viewer.test.mjs --naneyed build/daemon/naneyed [--screenshots DIR]
 // Prints one line per check and "N passed, N failed" at the end; exits non-zero on any failure.
 import { spawn } from "node:child_process";
@@ -54,11 +55,11 @@ writeFileSync(config, `[source]\nuri = "file://${capture}?speed=realtime&loop=1"
   `[http]\nhost = "127.0.0.1"\nport = ${port}\n`);
 
 let daemon = null;
-function startDaemon() {
-  daemon = spawn(naneyed, ["--config", config], { stdio: ["ignore", "ignore", "pipe"] });
+function startDaemon(cfg = config, at = origin) {
+  daemon = spawn(naneyed, ["--config", cfg], { stdio: ["ignore", "ignore", "pipe"] });
   daemon.stderr.on("data", () => {});
   return until("daemon up", async () => {
-    try { return (await fetch(`${origin}/v1/status`)).ok; } catch { return false; }
+    try { return (await fetch(`${at}/v1/status`)).ok; } catch { return false; }
   }, 15000);
 }
 async function stopDaemon() {
@@ -147,6 +148,64 @@ try {
   const p2 = await pair();
   const p3 = await until("pairs again", async () => { const p = await pair(); return p !== p2 ? p : null; }, 8000);
   check("the page recovers by itself", back && p3 !== null, `state streaming, pair ${p2} -> ${p3}`);
+  await stopDaemon();
+
+  // ---- a textured scene: the dense depth panel, the depth under the pointer, scene points in 3D ----
+  // The simulator renders the scene live at 10 fps (its renderer's pace, docs/simulator.md); no
+  // capture is bundled for it.
+  const scenePort = await freePort();
+  const sceneOrigin = `http://127.0.0.1:${scenePort}`;
+  const sceneConfig = join(dir, "scene.toml");
+  writeFileSync(sceneConfig, `[source]\nuri = "sim://sphere?fps=10&seed=4"\n` +
+    `[calibration]\npath = "${join(root, "config/calib/paper-d3.yaml")}"\n` +
+    `[http]\nhost = "127.0.0.1"\nport = ${scenePort}\n[recon]\nmode = "both"\n`);
+  check("naneyed serves a textured scene (sim://sphere)", await startDaemon(sceneConfig, sceneOrigin));
+  const scenePage = await browser.newPage();
+  await scenePage.setViewport({ width: 1280, height: 1000 });
+  const sceneErrors = [], sceneForeign = [];
+  scenePage.on("console", (m) => { if (m.type() === "error") sceneErrors.push(m.text()); });
+  scenePage.on("pageerror", (e) => sceneErrors.push(String(e)));
+  scenePage.on("request", (r) => {
+    const u = r.url();
+    if (!u.startsWith(sceneOrigin + "/") && !u.startsWith("blob:") && !u.startsWith("data:")) sceneForeign.push(u);
+  });
+  await scenePage.goto(`${sceneOrigin}/`, { waitUntil: "domcontentloaded" });
+  const latestScene = () => scenePage.evaluate(() => {
+    const r = window.naneyeViewer.view.latest;
+    return r && r.scene ? { pair: r.pair, valid: r.scene.valid_points, depth: r.scene.depth } : null;
+  });
+  const sc = await until("scene result", async () => { const r = await latestScene(); return r && r.depth ? r : null; }, 30000);
+  check("the page receives scene results with a dense map", sc !== null, sc ? `pair ${sc.pair}: ${sc.valid} valid points, ${(100 * sc.depth.valid_share).toFixed(1)} % dense` : "");
+  const depthShown = await until("depth image", () => scenePage.$eval("#img-depth", (e) => !e.hidden && e.complete && e.naturalWidth === 250 && e.naturalHeight === 286), 15000);
+  const note = await scenePage.$eval("#depth-note", (e) => e.textContent);
+  check("the depth panel shows the colour-mapped map with its scale in mm", depthShown && / scale [\d.]+-[\d.]+ mm/.test(note), note);
+  const sceneDrawn = await until("scene cloud", async () => { const n = await scenePage.evaluate(() => window.naneyeViewer.cloud.drawn); return n >= 300 ? n : null; }, 10000);
+  check("the 3D view draws the scene points", sceneDrawn !== null, `${sceneDrawn} points`);
+  // A pixel the dense map has a depth at (asked outside the page first, so the page's own request
+  // is a 200, not an expected 422 that would be logged as a console error).
+  let target = null;
+  for (const [u, v] of [[125, 125], [110, 120], [140, 130], [120, 100], [130, 150]]) {
+    const j = await (await fetch(`${sceneOrigin}/v1/depth/at?u=${u}&v=${v}`)).json();
+    if (j.source === "dense") { target = [u, v]; break; }
+  }
+  check("the dense map answers /v1/depth/at", target !== null, target ? `at (${target.join(", ")})` : "no dense depth near the centre");
+  if (target) {
+    const box = await (await scenePage.$("#ov-depth")).boundingBox();
+    await scenePage.mouse.move(box.x + ((target[0] + 0.5) / 250) * box.width, box.y + ((target[1] + 0.5) / 250) * box.height);
+    const under = await until("depth under pointer", async () => {
+      const t = await scenePage.$eval("#depth-at", (e) => e.textContent);
+      return /mm ± [\d.]+ mm \(dense map, pair \d+\)/.test(t) ? t : null;
+    }, 5000);
+    check("the depth and sigma under the pointer come from the dense map", under !== null, under || "");
+  }
+  if (screenshots) {
+    // A few pairs in, so that the health panel has rates to show.
+    await until("rates", () => scenePage.evaluate(() => (window.naneyeViewer.view.status?.fps.left ?? 0) > 0), 20000);
+    await sleep(1500);
+    await scenePage.screenshot({ path: join(screenshots, "viewer-scene.png"), fullPage: true });
+  }
+  check("no console errors on the scene", sceneErrors.length === 0, sceneErrors.join(" | "));
+  check("no request leaves the daemon on the scene", sceneForeign.length === 0, sceneForeign.join(" "));
 } catch (e) {
   check("the browser test ran to its end", false, e.stack || String(e));
 } finally {

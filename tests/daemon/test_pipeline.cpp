@@ -9,6 +9,7 @@
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/calibration_io.hpp"
+#include "scene_capture.hpp"
 #include "temp_dir.hpp"
 
 using namespace naneye;
@@ -105,5 +106,55 @@ TEST(Pipeline, ReloadsTheRigBetweenPairs) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   EXPECT_EQ(pipeline.status().calibration_reloads, 1u);
+  pipeline.stop();
+}
+
+// [recon] mode both on a textured scene: readers always find a result's scene beside it and, when
+// the result has a dense map, that map tagged with the result's own sequence number and pair
+// (never another pair's map), while the worker publishes and recycles the slots.
+TEST(Pipeline, SceneResultsAndTheirMapsBelongToTheirPair) {
+  TempDir dir;
+  const int n = 3;
+  write_scene_capture(dir.path / "s.raw", n);
+  daemon::Settings settings;
+  settings.recon_mode = daemon::ReconMode::both;
+  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+                            {"file://" + (dir.path / "s.raw").string() + "?speed=max", "test", false},
+                            paper_rig());
+  std::atomic<bool> done{false};
+  std::atomic<int> bad{0}, with_scene{0}, with_map{0};
+  auto reader = [&] {
+    while (!done.load()) {
+      pipeline.results().read_latest([&](const daemon::Published& p, std::uint64_t seq) {
+        bad += !p.scene.computed || p.result.pair + 1 != seq;
+        with_scene += p.scene.computed && p.scene.sparse.valid_count > 0;
+        if (!p.scene.dense) return;
+        pipeline.depth_maps().read_seq(seq, [&](const daemon::DepthSlot& d) {
+          bad += d.seq != seq || d.pair != p.result.pair || d.map.valid_count != p.scene.depth.valid_count;
+          ++with_map;
+        });
+      });
+    }
+  };
+  pipeline.start();
+  std::thread a(reader), b(reader);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (pipeline.pairs_processed() < static_cast<std::uint64_t>(n) &&
+         std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  done.store(true);
+  a.join();
+  b.join();
+  ASSERT_EQ(pipeline.pairs_processed(), static_cast<std::uint64_t>(n));
+  EXPECT_EQ(bad.load(), 0);
+  EXPECT_GT(with_scene.load(), 0);
+  const auto st = pipeline.status();
+  ASSERT_TRUE(st.scene.has_value());
+  EXPECT_EQ(st.scene_pairs, static_cast<std::uint64_t>(n));
+  EXPECT_GT(st.scene->valid_points, 300);
+  // Every pair's map was computed (mode both), and the latest one is summarized in the status.
+  EXPECT_EQ(st.dense_pairs, static_cast<std::uint64_t>(n));
+  EXPECT_TRUE(st.scene->depth.has_value());
+  EXPECT_GT(with_map.load(), 0);
   pipeline.stop();
 }

@@ -136,3 +136,14 @@ TEST(Settings, TheShippedConfigIsValid) {
   ASSERT_EQ(s.calibration.size(), 1u);
   EXPECT_TRUE(std::filesystem::is_regular_file(s.calibration[0])) << s.calibration[0];
 }
+
+TEST(Settings, ReconModeIsReadAndValidatedByName) {
+  EXPECT_EQ(parse_settings("", "/base").recon_mode, ReconMode::board);  // until scene fits 62 fps
+  EXPECT_EQ(parse_settings("[recon]\nmode = \"board\"\n", "/base").recon_mode, ReconMode::board);
+  EXPECT_EQ(parse_settings("[recon]\nmode = \"scene\"\n", "/base").recon_mode, ReconMode::scene);
+  EXPECT_EQ(parse_settings("[recon]\nmode = \"both\"\n", "/base").recon_mode, ReconMode::both);
+  EXPECT_NE(error_of("[recon]\nmode = \"dense\"\n").find("recon.mode: expected one of board, scene, both"),
+            std::string::npos);
+  EXPECT_NE(error_of("[recon]\nmode = 1\n").find("recon.mode: expected a string"), std::string::npos);
+  EXPECT_NE(error_of("[recon]\nmodes = \"board\"\n").find("recon.modes: unknown key"), std::string::npos);
+}

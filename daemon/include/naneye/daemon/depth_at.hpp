@@ -5,6 +5,7 @@
 
 #include "naneye/recon/pair_result.hpp"
 #include "naneye/recon/rig.hpp"
+#include "naneye/recon/scene/dense.hpp"
 
 namespace naneye::daemon {
 
@@ -26,5 +27,18 @@ struct DepthAt {
 // The board counts as the rectangle spanned by its inner corners plus one square around them (the
 // outer squares of the chessboard). `result.board` must be set for a number.
 DepthAt depth_at(const recon::CameraModel& left, const recon::PairResult& result, const Eigen::Vector2d& px);
+
+// Depth at a left raw pixel from a dense map (on the same raw grid): the map's value at the nearest
+// pixel centre (the map holds one depth per pixel; nothing is interpolated across a pixel that has
+// none), placed on that pixel centre's exact ray.
+enum class DenseAtStatus { ok, outside_model, no_convergence, no_depth };
+struct DenseDepthAt {
+  DenseAtStatus status = DenseAtStatus::no_depth;
+  int map_u = 0, map_v = 0;         // the map pixel used
+  Eigen::Vector3d xyz_mm{0, 0, 0};  // left camera frame
+  double depth_mm = 0, depth_sigma_mm = 0, range_mm = 0;
+};
+DenseDepthAt dense_depth_at(const recon::CameraModel& left, const recon::scene::DepthMap& map,
+                            const Eigen::Vector2d& px);
 
 }  // namespace naneye::daemon

@@ -29,6 +29,12 @@ class PinnedSlots {
 
   int size() const { return n_; }
 
+  // Writer only, before the first publication: fn(T&) on every slot (to size buffers inside T once).
+  template <typename Fn>
+  void prepare(Fn&& fn) {
+    for (int i = 0; i < n_; ++i) fn(slots_[i].value);
+  }
+
   // Writer only. A slot to fill for the next publication, or nullptr when all others are pinned.
   // The slot keeps its previous contents (so a caller can reuse buffers inside T).
   T* begin_write() {

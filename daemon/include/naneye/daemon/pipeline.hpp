@@ -28,6 +28,7 @@ using SourceFactory = std::function<std::unique_ptr<driver::FrameSource>(const s
 // One published result with the times the service adds to it.
 struct Published {
   recon::PairResult result;
+  SceneResult scene;              // empty (computed = false) in [recon] mode board
   std::uint64_t seq = 0;          // 1, 2, 3... per processed pair: the /v1/events id
   std::int64_t capture_ns = 0;    // CLOCK_MONOTONIC when the pair's last record arrived
   std::int64_t published_ns = 0;  // CLOCK_MONOTONIC when it was published
@@ -80,6 +81,14 @@ struct PipelineStatus {
   std::optional<double> last_result_age_ms;
   LatencyRecorder::Snapshot recon, capture_to_publish;
   double uptime_s = 0;
+  // The latest result's scene ([recon] mode scene or both; empty in mode board or before a result).
+  struct Scene {
+    int features = 0, valid_points = 0;
+    double noise_sigma_dn = 0;
+    std::optional<DepthSummary> depth;  // empty without a dense map
+  };
+  std::optional<Scene> scene;
+  std::uint64_t scene_pairs = 0, scene_valid_points = 0, dense_pairs = 0;  // totals since the start
 };
 
 class Pipeline {
@@ -109,6 +118,9 @@ class Pipeline {
 
   const PinnedSlots<Published>& results() const { return results_; }
   const PinnedSlots<FrameSnapshot>& frames() const { return frames_; }
+  // The latest dense maps, each tagged with its result's sequence number (depth_map(seq) finds the
+  // one of a given result, if it is still held).
+  const PinnedSlots<DepthSlot>& depth_maps() const { return depth_maps_; }
   PipelineStatus status() const;
   // Worker loop iterations: advances while the worker is alive, pairs or not.
   std::uint64_t heartbeat() const { return heartbeat_.load(std::memory_order_relaxed); }
@@ -142,12 +154,15 @@ class Pipeline {
 
   PinnedSlots<Published> results_;
   PinnedSlots<FrameSnapshot> frames_;
-  Published scratch_;  // used when every slot is pinned, so processing never waits
+  PinnedSlots<DepthSlot> depth_maps_;
+  Published scratch_;        // used when every slot is pinned, so processing never waits
+  DepthSlot depth_scratch_;  // the same for the dense map
 
   std::atomic<bool> stop_{false};
   std::thread worker_;
   std::atomic<std::uint64_t> heartbeat_{0}, processed_{0}, skipped_{0}, opens_{0}, open_failures_{0},
       reloads_{0};
+  std::atomic<std::uint64_t> scene_pairs_{0}, scene_valid_points_{0}, dense_pairs_{0};
   std::atomic<double> fps_left_{0}, fps_right_{0};
   std::atomic<std::int64_t> offset_ns_{0};
   std::atomic<bool> waiting_{false};

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string_view>
 
+#include "naneye/daemon/scene_result.hpp"
 #include "naneye/daemon/settings.hpp"
 #include "naneye/driver/frame.hpp"
 #include "naneye/recon/corners.hpp"
@@ -21,6 +22,23 @@ class PairProcessor {
   // Fills `out` (a preallocated slot that still holds an older result: overwrite every field).
   // Must not allocate: it runs once per pair.
   virtual void process(const driver::StereoPair& pair, recon::PairResult& out) = 0;
+  // The whole step as the pipeline runs it: the board into `out` and, in [recon] mode scene or
+  // both, the scene into `scene` and the dense map into `depth` (when given; the pipeline hands a
+  // slot of its own). Board-only steps clear `scene`. Must not allocate once `reserve` was called.
+  virtual void process_pair(const driver::StereoPair& pair, recon::PairResult& out, SceneResult& scene,
+                            recon::scene::DepthMap* depth) {
+    (void)depth;
+    process(pair, out);
+    scene.clear();
+  }
+  // True when process_pair computes the scene, and a dense map.
+  virtual bool scene() const { return false; }
+  virtual bool dense() const { return false; }
+  // Gives a result slot's buffers the capacity process_pair fills (called once per slot).
+  virtual void reserve(SceneResult& scene, recon::scene::DepthMap* depth) const {
+    (void)scene;
+    (void)depth;
+  }
   // Shown in the log and /v1/status.
   virtual std::string_view name() const = 0;
 };

@@ -10,6 +10,11 @@
 
 namespace naneye::daemon {
 
+// What the worker reconstructs per pair ([recon] mode): the board (corners, pose, P/D/R), the
+// textured scene (sparse points and the dense depth map, docs/scene.md), or both on the same pair.
+enum class ReconMode { board, scene, both };
+const char* to_string(ReconMode m);
+
 struct Settings {
   // [source]
   std::string source_uri = "auto";       // "auto": first attached readout board, else `sample_capture`
@@ -38,6 +43,10 @@ struct Settings {
   double square_mm = 5.99;
   bool tracking = true;  // search around the previous pair's corners first
   bool detect = true;    // false: serve frames and timing only (a rig without a target in view)
+  // [recon]
+  // board until the scene path fits the 62 fps budget: sparse alone takes 17-31 ms per pair today
+  // (docs/scene.md), so "both" would drop every other pair of a live camera (docs/http-api.md).
+  ReconMode recon_mode = ReconMode::board;
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error, critical, off
 };

@@ -4,9 +4,15 @@
 // fed to driver::ByteStreamSource (parser -> pairer -> pool -> lock-free ring -> next()), so the
 // counters, the raw tap (naneye record) and the hand-over behave exactly as with a camera.
 //
-//   sim://paper-d1|paper-d2|paper-d3
-//     ?fps=<43..62>           nominal frame rate (drifts within 43-62 fps, as the sensors do)
-//     &motion=orbit|sweep|still
+//   sim://paper-d1|paper-d2|paper-d3            the paper's board
+//   sim://plane|plane-far|sphere|tube|height     a textured scene (textured.hpp), seen by a camera
+//                                                held by hand (motion=handheld, the default there)
+//     ?fps=<43..62>           nominal frame rate (drifts within 43-62 fps, as the sensors do); a
+//                             textured scene takes 1..62 and defaults to 10: its renderer manages
+//                             ~10-20 pairs/s on one core, and a camera rate it cannot hold would
+//                             be a number the stream does not have (speed=max: as fast as it renders)
+//     &motion=orbit|sweep|still|handheld
+//     &supersample=1..3       textured scenes: sub-samples per pixel side (default 1; 3 as the tests)
 //     &seed=<n>               noise and timing; the same seed gives the same pairs
 //     &bayer=0|1  &noise=0|1  (noise=0: ideal sensor, uniform light)
 //     &pairs=<n>              stop after n pairs (0: endless)
@@ -20,10 +26,11 @@
 #include "naneye/driver/source_registry.hpp"
 #include "naneye/driver/source_uri.hpp"
 #include "naneye/sim/presets.hpp"
+#include "naneye/sim/textured.hpp"
 
 namespace naneye::sim {
 
-enum class Motion { orbit, sweep, still };
+enum class Motion { orbit, sweep, still, handheld };
 
 struct SimSourceOptions {
   std::string preset = "paper-d3";
@@ -35,6 +42,8 @@ struct SimSourceOptions {
   std::uint64_t pairs = 0;
   bool realtime = true;
   driver::StreamSettings stream;
+  bool textured = false;  // preset is a textured scene (textured_preset), not a board
+  int supersample = 1;
 };
 
 SimSourceOptions parse_sim_uri(const driver::SourceUri& uri);
@@ -52,8 +61,11 @@ class SimSource : public driver::ByteStreamSource {
   void run() override;
 
  private:
+  void run_textured();
+
   SimSourceOptions options_;
   std::unique_ptr<Renderer> renderer_;
+  std::unique_ptr<TexturedRenderer> textured_;
 };
 
 // Adds the "sim" scheme to a registry.
