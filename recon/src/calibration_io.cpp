@@ -43,35 +43,41 @@ class Keys {
       throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.err);
     }
     const cv::FileNode root = fs.root();
-    for (auto it = root.begin(); it != root.end(); ++it) {
-      const cv::FileNode node = *it;
-      const std::string key = node.name();
-      cv::Mat m;
-      try {
-        if (node.isInt() || node.isReal()) {
-          m = cv::Mat(1, 1, CV_64F, cv::Scalar(static_cast<double>(node)));
-        } else if (node.isMap() && !node["data"].empty()) {
-          const int rows = static_cast<int>(node["rows"]), cols = static_cast<int>(node["cols"]);
-          const std::size_t given = node["data"].size();
-          if (rows < 1 || cols < 1 || given != static_cast<std::size_t>(rows) * cols)
-            fail(file, key,
-                 "data has " + std::to_string(given) + " values but rows x cols is " + std::to_string(rows) +
-                     "x" + std::to_string(cols));
-          node >> m;
-        } else {
-          continue;  // strings, comments and other keys that are not ours
+    // OpenCV's own reading of a damaged file can throw from anywhere in the walk (FileNode::name()
+    // asserted on a file the fuzzer wrote): every such failure is this file's, and said so.
+    try {
+      for (auto it = root.begin(); it != root.end(); ++it) {
+        const cv::FileNode node = *it;
+        const std::string key = node.name();
+        cv::Mat m;
+        try {
+          if (node.isInt() || node.isReal()) {
+            m = cv::Mat(1, 1, CV_64F, cv::Scalar(static_cast<double>(node)));
+          } else if (node.isMap() && !node["data"].empty()) {
+            const int rows = static_cast<int>(node["rows"]), cols = static_cast<int>(node["cols"]);
+            const std::size_t given = node["data"].size();
+            if (rows < 1 || cols < 1 || given != static_cast<std::size_t>(rows) * cols)
+              fail(file, key,
+                   "data has " + std::to_string(given) + " values but rows x cols is " +
+                       std::to_string(rows) + "x" + std::to_string(cols));
+            node >> m;
+          } else {
+            continue;  // strings, comments and other keys that are not ours
+          }
+        } catch (const cv::Exception& e) {
+          fail(file, key, "not a matrix: " + e.err);
         }
-      } catch (const cv::Exception& e) {
-        fail(file, key, "not a matrix: " + e.err);
+        if (m.empty()) fail(file, key, "empty matrix");
+        m.convertTo(m, CV_64F);
+        if (auto found = entries_.find(key); found != entries_.end()) {
+          if (!same(found->second.value, m))
+            fail(file, key, "given again with a different value (first in " + found->second.file + ")");
+          continue;
+        }
+        entries_[key] = Entry{m, file};
       }
-      if (m.empty()) fail(file, key, "empty matrix");
-      m.convertTo(m, CV_64F);
-      if (auto found = entries_.find(key); found != entries_.end()) {
-        if (!same(found->second.value, m))
-          fail(file, key, "given again with a different value (first in " + found->second.file + ")");
-        continue;
-      }
-      entries_[key] = Entry{m, file};
+    } catch (const cv::Exception& e) {
+      throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.err);
     }
   }
 
