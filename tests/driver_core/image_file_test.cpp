@@ -28,7 +28,7 @@ TEST(ImageFile, ReadsOpenCvsStereoPhotographsAtTheirOwnSize) {
   ASSERT_EQ(im.pixels.size(), 640u * 480u);
   // The same decoder's 8-bit values, scaled 255 -> 1023 with rounding.
   const cv::Mat ref = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  for (const auto [r, c] : {std::pair{0, 0}, {240, 320}, {479, 639}, {100, 500}}) {
+  for (const auto& [r, c] : {std::pair{0, 0}, {240, 320}, {479, 639}, {100, 500}}) {
     const unsigned v = ref.at<std::uint8_t>(r, c);
     EXPECT_EQ(im.pixels[static_cast<std::size_t>(r) * 640 + c], (v * 1023 + 127) / 255) << r << "," << c;
   }
