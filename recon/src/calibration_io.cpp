@@ -41,6 +41,10 @@ class Keys {
       if (!fs.open(file, cv::FileStorage::READ)) throw CalibrationError(file + ": cannot be opened");
     } catch (const cv::Exception& e) {
       throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.err);
+    } catch (const std::exception& e) {
+      // OpenCV's parser passes on what its own code throws (std::length_error for a length it
+      // computed from a damaged file, found by fuzz_calib_yaml).
+      throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.what());
     }
     const cv::FileNode root = fs.root();
     // OpenCV's own reading of a damaged file can throw from anywhere in the walk (FileNode::name()
@@ -78,6 +82,10 @@ class Keys {
       }
     } catch (const cv::Exception& e) {
       throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.err);
+    } catch (const CalibrationError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.what());
     }
   }
 
