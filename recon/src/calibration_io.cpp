@@ -1,7 +1,10 @@
 #include "naneye/recon/calibration_io.hpp"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -36,6 +39,14 @@ class Keys {
   void read(const std::filesystem::path& path) {
     const std::string file = path.string();
     if (!std::filesystem::exists(path)) throw CalibrationError(file + ": file not found");
+    // A NUL byte is never in a FileStorage text (YAML, XML, JSON), and OpenCV 4.6's reader loops
+    // forever on one (fuzz_calib_yaml: a 492-byte file held FileStorage::open for minutes).
+    {
+      std::ifstream in(path, std::ios::binary);
+      if (std::find(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\0') !=
+          std::istreambuf_iterator<char>())
+        throw CalibrationError(file + ": holds a NUL byte: not an OpenCV FileStorage text file");
+    }
     cv::FileStorage fs;
     try {
       if (!fs.open(file, cv::FileStorage::READ)) throw CalibrationError(file + ": cannot be opened");
