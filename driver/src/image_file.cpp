@@ -31,15 +31,16 @@ void scale_into(const cv::Mat& m, std::uint32_t max, std::uint16_t* out) {
 
 // The formats this reader is for, by their first bytes: PNG, JPEG, PBM/PGM/PPM (P1..P6), BMP, TIFF.
 // Everything else is refused before OpenCV picks a decoder: imdecode would also hand the bytes to
-// GDCM (DICOM), OpenJPEG, OpenEXR..., and fuzz_image found a file on which libgdcm's own assert()
-// aborts the process.
+// GDCM (DICOM), OpenJPEG, OpenEXR..., and fuzz_image found files on which libgdcm's own assert()
+// aborts the process or it allocates 4 GB. Each test is exactly OpenCV's own for that format (a
+// netpbm header needs its whitespace), so that no accepted file falls through to another decoder.
 bool known_signature(std::span<const std::uint8_t> b) {
   const auto starts = [&](std::initializer_list<std::uint8_t> sig) {
     return b.size() >= sig.size() && std::equal(sig.begin(), sig.end(), b.begin());
   };
   return starts({0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}) || starts({0xff, 0xd8, 0xff}) ||
-         (b.size() >= 2 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6') || starts({'B', 'M'}) ||
-         starts({'I', 'I', 0x2a, 0x00}) || starts({'M', 'M', 0x00, 0x2a});
+         (b.size() >= 3 && b[0] == 'P' && b[1] >= '1' && b[1] <= '6' && std::isspace(b[2])) ||
+         starts({'B', 'M'}) || starts({'I', 'I', 0x2a, 0x00}) || starts({'M', 'M', 0x00, 0x2a});
 }
 
 }  // namespace
