@@ -33,7 +33,7 @@ class SourceRegistry {
 };
 
 void register_file_source(SourceRegistry& registry);
-void register_image_source(SourceRegistry& registry);  // images:// (image_source.hpp)
+void register_image_source(SourceRegistry& registry);    // images:// (image_source.hpp)
 void register_device_sources(SourceRegistry& registry);  // usb, v4l2 (device backends)
 SourceRegistry make_default_registry();
 
