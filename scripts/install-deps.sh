@@ -7,6 +7,7 @@ packages=(
   libcpp-httplib-dev libusb-1.0-0-dev libsystemd-dev libtomlplusplus-dev zlib1g-dev
   libreaderwriterqueue-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
   libumockdev-dev umockdev curl file chromium libyaml-cpp-dev opencv-doc
+  libclang-rt-14-dev  # libFuzzer for scripts/fuzz.sh (clang itself does not pull it in)
 )
 # The viewer's browser test (tests/browser) drives Debian's chromium with puppeteer-core from npm;
 # node comes with the machine, or from Debian (node 18 is enough for puppeteer-core 24).

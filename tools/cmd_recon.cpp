@@ -1,6 +1,8 @@
 // `naneye recon --calib FILE --input URI [--json]`: one result per stereo pair, in stream order, pairs
 // without a board included. A file is replayed at max speed with a lossless hand-over: no pair is
 // ever dropped. The per-pair step and the JSON are the daemon's own (one code path, one serializer).
+// `--left L... --right R...` reads image pairs instead (any size, that of the calibration; the
+// images:// reader, driver::read_image): a pair that cannot be read is reported and skipped.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,12 +19,15 @@
 
 #include "cli_inputs.hpp"
 #include "commands.hpp"
+#include "image_pairs.hpp"
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
+#include "naneye/driver/image_file.hpp"
 #include "naneye/recon/calibration_io.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
+#include "naneye/recon/stereo_reconstructor.hpp"
 #include "scene_json.hpp"
 
 namespace naneye::tools {
@@ -31,6 +36,8 @@ namespace {
 struct ReconOptions {
   std::vector<std::string> calib;
   std::string input;
+  std::vector<std::string> left, right;  // image files (or glob patterns), instead of --input
+  std::string color = "mono";
   bool json = false;
   std::string pattern = "6x8";
   double square_mm = 5.99;
@@ -73,14 +80,15 @@ recon::RawImageView frame_view(const driver::Frame& f) {
   return v;
 }
 
-void print_scene_line(const recon::scene::SparseResult& s, const recon::scene::DepthMap& d) {
+void print_scene_line(const recon::scene::SparseResult& s, const recon::scene::DepthMap* d) {
   double sigma = 0;
   for (const auto& p : s.points)
     if (p.valid()) sigma += p.depth_sigma_mm;
   std::printf("        scene: %d/%zu points valid, mean depth sigma %.3f mm\n", s.valid_count,
               s.points.size(), s.valid_count ? sigma / s.valid_count : NAN);
-  std::printf("        dense: %d/%d visible pixels with depth (%.1f %%), median %.2f mm\n", d.valid_count,
-              d.visible_count, 100 * d.valid_share, d.median_mm);
+  if (d)
+    std::printf("        dense: %d/%d visible pixels with depth (%.1f %%), median %.2f mm\n", d->valid_count,
+                d->visible_count, 100 * d->valid_share, d->median_mm);
 }
 
 // "no_board_left (left: low_contrast, right: none)": what a user reads to tell "too dark" from
@@ -114,16 +122,75 @@ void print_line(const recon::PairResult& r) {
   std::printf("\n");
 }
 
-void run_recon(const ReconOptions& o) {
+// Prints each result as it comes (text or JSON lines) and the summary at the end.
+class Report {
+ public:
+  explicit Report(bool json) : json_(json) {}
+  void pair(const recon::PairResult& r, const recon::scene::SparseResult* scene,
+            const recon::scene::DepthMap* depth) {
+    ++pairs_;
+    found_ += r.board_found;
+    if (!r.board_found) {
+      ++outcomes_[r.failure ? r.failure : "unknown"];
+      if (r.failure_left) ++left_reasons_[r.failure_left];
+      if (r.failure_right) ++right_reasons_[r.failure_right];
+    }
+    if (json_) {
+      nlohmann::json j = daemon::result_to_json(r);
+      if (!r.board_found) {
+        j["failure"] = {{"outcome", r.failure ? r.failure : "unknown"},
+                        {"left", r.failure_left ? r.failure_left : "unknown"},
+                        {"right", r.failure_right ? r.failure_right : "unknown"}};
+      }
+      if (scene) j["scene"] = scene_to_json(*scene, depth);
+      std::cout << j.dump() << "\n";
+    } else {
+      print_line(r);
+      if (scene) print_scene_line(*scene, depth);
+    }
+  }
+  void skipped(const std::string& why) {
+    ++skipped_;
+    std::fprintf(stderr, "naneye recon: pair skipped: %s\n", why.c_str());
+  }
+  long long pairs() const { return pairs_; }
+  void finish() {
+    if (json_) {
+      // The last line: a summary object (it has "summary", where a pair has "pair").
+      nlohmann::json sum = {{"pairs", pairs_}, {"found", found_}, {"not_found", pairs_ - found_}};
+      if (skipped_) sum["skipped"] = skipped_;
+      sum["failures"] = {{"outcome", outcomes_}, {"left", left_reasons_}, {"right", right_reasons_}};
+      std::cout << nlohmann::json{{"summary", sum}}.dump() << "\n";
+    }
+    std::cout.flush();
+    std::fprintf(stderr, "naneye recon: %lld pairs, board found in %lld", pairs_, found_);
+    if (skipped_) std::fprintf(stderr, ", %lld skipped (unreadable)", skipped_);
+    std::fprintf(stderr, "\n");
+    for (const auto& [why, n] : outcomes_) std::fprintf(stderr, "  not found: %lld %s\n", n, why.c_str());
+    for (const auto& [why, n] : left_reasons_)
+      std::fprintf(stderr, "    left eye: %lld %s\n", n, why.c_str());
+    for (const auto& [why, n] : right_reasons_)
+      std::fprintf(stderr, "    right eye: %lld %s\n", n, why.c_str());
+  }
+
+ private:
+  bool json_;
+  long long pairs_ = 0, found_ = 0, skipped_ = 0;
+  // Pairs per reason (the pair's outcome and, per eye, the detector's), for the summary.
+  std::map<std::string, long long> outcomes_, left_reasons_, right_reasons_;
+};
+
+daemon::Settings recon_settings(const ReconOptions& o) {
   daemon::Settings settings;
   parse_pattern(o.pattern, settings.board_rows, settings.board_cols);
   settings.square_mm = o.square_mm;
   settings.corner_sigma_px = o.corner_sigma_px;
   settings.tracking = !o.no_tracking;
-  std::vector<std::filesystem::path> calib(o.calib.begin(), o.calib.end());
-  const recon::StereoRig rig = recon::load_rig(calib);
+  return settings;
+}
 
-  auto processor = daemon::make_processor(settings);
+void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
+  auto processor = daemon::make_processor(recon_settings(o));
   processor->set_rig(rig);
   auto source = daemon::make_source_registry().open(lossless_input_uri(o.input));
   source->start();
@@ -138,10 +205,8 @@ void run_recon(const ReconOptions& o) {
   recon::scene::SparseResult scene_result;
   recon::scene::DepthMap depth;
   cv::Mat z16, s16;
-  long long pairs = 0, found = 0;
-  // Pairs per reason (the pair's outcome and, per eye, the detector's), for the summary.
-  std::map<std::string, long long> outcomes, left_reasons, right_reasons;
-  while (o.max_pairs < 0 || pairs < o.max_pairs) {
+  Report report(o.json);
+  while (o.max_pairs < 0 || report.pairs() < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
     if (!pair) {
       if (driver::has_ended(source->state())) break;
@@ -156,40 +221,74 @@ void run_recon(const ReconOptions& o) {
       if (!o.depth_out.empty())
         write_depth_pngs(o.depth_out, static_cast<unsigned long long>(result->pair), depth, z16, s16);
     }
-    ++pairs;
-    found += result->board_found;
-    if (!result->board_found) {
-      ++outcomes[result->failure ? result->failure : "unknown"];
-      if (result->failure_left) ++left_reasons[result->failure_left];
-      if (result->failure_right) ++right_reasons[result->failure_right];
-    }
-    if (o.json) {
-      nlohmann::json j = daemon::result_to_json(*result);
-      if (!result->board_found) {
-        j["failure"] = {{"outcome", result->failure ? result->failure : "unknown"},
-                        {"left", result->failure_left ? result->failure_left : "unknown"},
-                        {"right", result->failure_right ? result->failure_right : "unknown"}};
-      }
-      if (scene) j["scene"] = scene_to_json(scene_result, &depth);
-      std::cout << j.dump() << "\n";
-    } else {
-      print_line(*result);
-      if (scene) print_scene_line(scene_result, depth);
-    }
+    report.pair(*result, scene ? &scene_result : nullptr, scene ? &depth : nullptr);
   }
   source->stop();
-  if (o.json) {
-    // The last line: a summary object (it has "summary", where a pair has "pair").
-    nlohmann::json sum = {{"pairs", pairs}, {"found", found}, {"not_found", pairs - found}};
-    sum["failures"] = {{"outcome", outcomes}, {"left", left_reasons}, {"right", right_reasons}};
-    std::cout << nlohmann::json{{"summary", sum}}.dump() << "\n";
-  }
-  std::cout.flush();
-  std::fprintf(stderr, "naneye recon: %lld pairs, board found in %lld\n", pairs, found);
-  for (const auto& [why, n] : outcomes) std::fprintf(stderr, "  not found: %lld %s\n", n, why.c_str());
-  for (const auto& [why, n] : left_reasons) std::fprintf(stderr, "    left eye: %lld %s\n", n, why.c_str());
-  for (const auto& [why, n] : right_reasons) std::fprintf(stderr, "    right eye: %lld %s\n", n, why.c_str());
+  report.finish();
   if (auto err = source->error()) throw std::runtime_error(*err);
+}
+
+// Image pairs of any size: the recon step on views of the decoded images (a driver::Frame is
+// 250 x 250 only, so these do not go through a FrameSource). Decoding allocates per image.
+void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
+  const auto pairs = image_pairs(o.left, o.right);
+  driver::ImageOptions io;
+  if (o.color != "mono" && o.color != "grbg") throw std::invalid_argument("--color: mono or grbg");
+  io.color = o.color == "grbg" ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
+  recon::StereoReconstructor reconstructor(rig, daemon::reconstructor_settings(recon_settings(o)));
+  std::unique_ptr<recon::scene::SparseReconstructor> scene;
+  std::unique_ptr<recon::scene::DenseReconstructor> dense;
+  if (o.scene || !o.depth_out.empty()) {
+    scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
+    dense = std::make_unique<recon::scene::DenseReconstructor>(rig);
+  }
+  if (!o.depth_out.empty()) std::filesystem::create_directories(o.depth_out);
+  recon::scene::SparseResult scene_result;
+  recon::scene::DepthMap depth;
+  cv::Mat z16, s16;
+  auto result = std::make_unique<recon::PairResult>();
+  driver::Image10 left, right;
+  Report report(o.json);
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (o.max_pairs >= 0 && report.pairs() >= o.max_pairs) break;
+    try {
+      driver::read_image(pairs[i].first, io, left);
+      driver::read_image(pairs[i].second, io, right);
+      for (const auto* im : {&left, &right})
+        if (im->width != rig.left.width() || im->height != rig.left.height())
+          throw driver::ImageError((im == &left ? pairs[i].first : pairs[i].second) + ": " +
+                                   std::to_string(im->width) + " x " + std::to_string(im->height) +
+                                   " pixels, but the calibration is for " + std::to_string(rig.left.width()) +
+                                   " x " + std::to_string(rig.left.height()));
+    } catch (const driver::ImageError& e) {
+      report.skipped(e.what());
+      continue;
+    }
+    *result = recon::PairResult{};
+    result->pair = i;
+    const recon::RawImageView lv = image_view(left), rv = image_view(right);
+    reconstructor.process(lv, rv, *result);
+    if (scene) {
+      scene->load_luma(lv, rv);
+      scene->reconstruct(scene->luma(), scene_result);
+      dense->reconstruct(scene->luma(), depth);
+      if (!o.depth_out.empty()) write_depth_pngs(o.depth_out, i, depth, z16, s16);
+    }
+    report.pair(*result, scene ? &scene_result : nullptr, scene ? &depth : nullptr);
+  }
+  report.finish();
+  if (report.pairs() == 0) throw std::runtime_error("no image pair could be read");
+}
+
+void run_recon(const ReconOptions& o) {
+  if (o.input.empty() == o.left.empty())
+    throw std::invalid_argument("give --input URI, or --left and --right image files (not both)");
+  std::vector<std::filesystem::path> calib(o.calib.begin(), o.calib.end());
+  const recon::StereoRig rig = recon::load_rig(calib);
+  if (o.left.empty())
+    run_recon_source(o, rig);
+  else
+    run_recon_images(o, rig);
 }
 
 }  // namespace
@@ -201,8 +300,13 @@ void add_recon_commands(CLI::App& app) {
   cmd->add_option("--calib", o->calib, "Calibration YAML (one file, or intrinsics and extrinsics)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--input", o->input, "Source URI (file://, usb://, v4l2://, sim://) or a capture path")
-      ->required();
+  cmd->add_option("--input", o->input,
+                  "Source URI (file://, usb://, v4l2://, sim://, images://) or a capture path");
+  cmd->add_option("--left", o->left,
+                  "Left image files (PNG, JPEG, PGM, BMP, TIFF) or glob patterns, sorted by name; any size");
+  cmd->add_option("--right", o->right, "Right image files or glob patterns, paired in order with --left");
+  cmd->add_option("--color", o->color, "Image files hold mono frames or raw GRBG mosaics (mono, grbg)")
+      ->capture_default_str();
   cmd->add_flag("--json", o->json, "One JSON object per pair (the daemon's /v1/depth object)");
   cmd->add_option("--pattern", o->pattern, "Inner corners ROWSxCOLS")->capture_default_str();
   cmd->add_option("--square-mm", o->square_mm, "Square size")

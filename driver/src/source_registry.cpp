@@ -1,5 +1,7 @@
 #include "naneye/driver/source_registry.hpp"
 
+#include "naneye/driver/image_source.hpp"
+
 namespace naneye::driver {
 
 void SourceRegistry::add(std::string scheme, SourceFactory factory) {
@@ -34,6 +36,7 @@ std::unique_ptr<FrameSource> SourceRegistry::open(std::string_view text) const {
 SourceRegistry make_default_registry() {
   SourceRegistry r;
   register_file_source(r);
+  register_image_source(r);
   register_device_sources(r);
   return r;
 }

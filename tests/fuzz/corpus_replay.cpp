@@ -1,6 +1,6 @@
 // Feeds every file of a fuzz corpus to its entry point: the corpus is replayed as an ordinary test
 // in every build (gcc included), so a crash once found by the fuzzer stays fixed.
-//   fuzz_corpus_replay parser|neyd DIR
+//   fuzz_corpus_replay ENTRY DIR     (ENTRY: a name of fuzz_entries.hpp's kEntries)
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -11,16 +11,17 @@
 #include "fuzz_entries.hpp"
 
 int main(int argc, char** argv) {
+  std::string names;
+  for (const auto& e : naneye::fuzz::kEntries) names += (names.empty() ? "" : ", ") + std::string(e.name);
   if (argc != 3) {
-    std::cerr << "usage: fuzz_corpus_replay parser|neyd DIR\n";
+    std::cerr << "usage: fuzz_corpus_replay ENTRY DIR; entries: " << names << "\n";
     return 2;
   }
-  const std::string which = argv[1];
-  auto entry = which == "parser" ? naneye::fuzz::parse_stream
-               : which == "neyd" ? naneye::fuzz::read_neyd
-                                 : nullptr;
+  naneye::fuzz::Entry entry = nullptr;
+  for (const auto& e : naneye::fuzz::kEntries)
+    if (e.name == argv[1]) entry = e.entry;
   if (!entry) {
-    std::cerr << "unknown entry '" << which << "'; accepted: parser, neyd\n";
+    std::cerr << "unknown entry '" << argv[1] << "'; accepted: " << names << "\n";
     return 2;
   }
   std::vector<std::filesystem::path> files;

@@ -11,6 +11,7 @@
 #include "naneye/recon/corners.hpp"
 #include "naneye/recon/pair_result.hpp"
 #include "naneye/recon/rig.hpp"
+#include "naneye/recon/stereo_reconstructor.hpp"
 
 namespace naneye::daemon {
 
@@ -46,6 +47,10 @@ class PairProcessor {
 // The processing step naneyed and `naneye recon` run: recon::StereoReconstructor on both raw frames
 // (the board of settings' [board] section).
 std::unique_ptr<PairProcessor> make_processor(const Settings& settings);
+
+// The reconstructor's settings for the [board] and [pipeline] sections (what make_processor uses;
+// `naneye recon --left/--right` runs recon::StereoReconstructor on images of any size with them).
+recon::StereoReconstructorSettings reconstructor_settings(const Settings& settings);
 
 // A driver frame as the recon module sees it (no copy).
 recon::RawImageView image_view(const driver::Frame& frame);

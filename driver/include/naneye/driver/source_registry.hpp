@@ -3,7 +3,7 @@
 // one with make_default_registry() and may add more schemes (e.g. the simulator's "sim").
 //
 // Hook for the device backends: register_device_sources() (driver/src/device_sources.cpp) adds
-// usb:// and v4l2://; make_default_registry() calls it after registering file://.
+// usb:// and v4l2://; make_default_registry() calls it after registering file:// and images://.
 #include <functional>
 #include <map>
 #include <memory>
@@ -33,6 +33,7 @@ class SourceRegistry {
 };
 
 void register_file_source(SourceRegistry& registry);
+void register_image_source(SourceRegistry& registry);    // images:// (image_source.hpp)
 void register_device_sources(SourceRegistry& registry);  // usb, v4l2 (device backends)
 SourceRegistry make_default_registry();
 
