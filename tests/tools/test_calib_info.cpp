@@ -1,6 +1,8 @@
 // `naneye calib info`: the figures the issue asks for, read from the real binary's JSON.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
@@ -38,4 +40,38 @@ TEST(CalibInfo, MissingKeyNamesFileAndKey) {
   const auto r = run_cli("calib info " + path, true);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.out.find("naneye-partial.yaml: key 'M1': missing"), std::string::npos) << r.out;
+}
+
+namespace {
+
+// The bundled calibration with the right camera's k1 replaced, written to a temporary file.
+std::string paper_with_right_k1(const std::string& k1, const char* name) {
+  std::ifstream in(std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  const auto d2 = text.find("D2:");
+  const auto data = text.find("data: [", d2);
+  const auto comma = text.find(',', data);
+  text.replace(data + 7, comma - data - 7, " " + k1);
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+}  // namespace
+
+TEST(CalibInfo, RefusesWhatTheDaemonRefuses) {
+  // A distortion of 1e300 was described as if it were a camera (exit 0, a fold radius, a share).
+  const auto bad = paper_with_right_k1("1e300", "naneye-k1-1e300.yaml");
+  for (const char* cmd :
+       {"calib info ", "calib info --json ", "calib export --format ros --out /tmp/naneye-x "}) {
+    const auto r = run_cli(cmd + bad, true);
+    EXPECT_EQ(r.exit_code, 1) << cmd << r.out;
+    EXPECT_NE(r.out.find("naneye-k1-1e300.yaml: not a usable calibration: right camera: distortion "
+                         "coefficient 1e+300 beyond +-100"),
+              std::string::npos)
+        << cmd << r.out;
+  }
+  // The same file with a sane k1 is described.
+  const auto ok = paper_with_right_k1("-0.2", "naneye-k1-sane.yaml");
+  EXPECT_EQ(run_cli("calib info --json " + ok).exit_code, 0);
 }
