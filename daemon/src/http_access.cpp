@@ -100,8 +100,13 @@ std::string form_field(std::string_view body, std::string_view name) {
 
 std::string_view bearer(const httplib::Request& req, std::string& storage) {
   storage = req.get_header_value("Authorization");
-  constexpr std::string_view scheme = "Bearer ";
-  if (storage.size() <= scheme.size() || storage.compare(0, scheme.size(), scheme) != 0) return {};
+  // The scheme's name is case-insensitive (RFC 9110, section 11.1).
+  constexpr std::string_view scheme = "bearer ";
+  if (storage.size() <= scheme.size()) return {};
+  for (std::size_t i = 0; i < scheme.size(); ++i) {
+    const char c = storage[i] >= 'A' && storage[i] <= 'Z' ? static_cast<char>(storage[i] + 32) : storage[i];
+    if (c != scheme[i]) return {};
+  }
   return std::string_view(storage).substr(scheme.size());
 }
 

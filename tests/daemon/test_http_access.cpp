@@ -109,6 +109,8 @@ TEST_F(NaneyedAccess, WithATokenFileEveryRequestButHealthzMustPresentIt) {
   EXPECT_EQ(status_of(r), 401) << "nor is a prefix";
   r = round_trip(port, get("/v1/status", host() + "Authorization: Bearer " + kToken + "\r\n"));
   EXPECT_EQ(status_of(r), 200) << r;
+  r = round_trip(port, get("/v1/status", host() + "Authorization: bearer " + kToken + "\r\n"));
+  EXPECT_EQ(status_of(r), 200) << "the scheme's name is case-insensitive";
   EXPECT_EQ(status_of(round_trip(port, get("/healthz", host()))), 200);
   EXPECT_EQ(status_of(round_trip(port, get("/metrics", host()))), 401);
 }
