@@ -4,7 +4,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config clang clang-format
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
-  libcpp-httplib-dev libusb-1.0-0-dev libsystemd-dev libtomlplusplus-dev zlib1g-dev
+  libcpp-httplib-dev libssl-dev libusb-1.0-0-dev libsystemd-dev libtomlplusplus-dev zlib1g-dev
   libreaderwriterqueue-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
   libumockdev-dev umockdev curl file chromium libyaml-cpp-dev opencv-doc
   libclang-rt-14-dev  # libFuzzer for scripts/fuzz.sh (clang itself does not pull it in)

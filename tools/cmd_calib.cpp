@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "naneye/recon/calibration_io.hpp"
 #include "naneye/recon/domain_report.hpp"
+#include "naneye/recon/rig_validate.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -65,6 +66,10 @@ void add_calib_commands(CLI::App& app) {
   info->callback([files, json] {
     std::vector<std::filesystem::path> paths(files->begin(), files->end());
     const recon::StereoRig rig = recon::load_rig(paths);
+    // What naneyed refuses at start and on SIGHUP is refused here too: describing it would print
+    // figures (a fold radius, a valid share) of a model that cannot exist.
+    if (auto problem = recon::rig_problem(rig))
+      throw recon::CalibrationError(files->front() + ": not a usable calibration: " + *problem);
     nlohmann::json j;
     j["files"] = *files;
     j["image_size"] = {rig.left.width(), rig.left.height()};
@@ -101,6 +106,8 @@ void add_calib_commands(CLI::App& app) {
   exp->callback([ex_files, format, out_dir] {
     const recon::StereoRig rig =
         recon::load_rig(std::vector<std::filesystem::path>(ex_files->begin(), ex_files->end()));
+    if (auto problem = recon::rig_problem(rig))
+      throw recon::CalibrationError(ex_files->front() + ": not a usable calibration: " + *problem);
     std::filesystem::create_directories(*out_dir);
     const auto written = *format == "ros"      ? export_ros(rig, *out_dir)
                          : *format == "opencv" ? export_opencv(rig, *out_dir)

@@ -126,7 +126,8 @@ void run_replay(const ReplayOptions& o) {
     off_sum += static_cast<double>(off);
     off_min = std::min(off_min, off);
     off_max = std::max(off_max, off);
-    ref_bad += !p->left.reference_ok + !p->right.reference_ok;
+    ref_bad += (p->left.reference == driver::ReferenceStatus::failed) +
+               (p->right.reference == driver::ReferenceStatus::failed);
     if (!o.stats && !o.json)
       std::cout << "pair " << p->index << "  left seq " << int(p->left.seq) << " t "
                 << p->left.sensor_ns / 1e6 << " ms  right seq " << int(p->right.seq) << " t "

@@ -4,6 +4,7 @@
 
 #include <chrono>
 
+#include "http_access.hpp"
 #include "naneye/driver/source_uri.hpp"
 
 namespace naneye::daemon {
@@ -62,6 +63,7 @@ void check_capture(const std::string& path, const std::string& key, const driver
 
 std::vector<std::string> check_config(const Settings& s, const driver::SourceRegistry& registry) {
   std::vector<std::string> problems;
+  http::check_access_files(s, problems);
   if (s.source_uri == "auto") {
     if (!s.sample_capture.empty())
       check_capture(s.sample_capture.string(), "source.sample_capture", registry, problems);

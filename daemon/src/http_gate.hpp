@@ -15,7 +15,9 @@
 //  - bounds the number of open connections (and so descriptors), closing the oldest connection that
 //    has sent nothing (idle keep-alive, or silent) for a newcomer, or else answering it 503 at once;
 //  - answers 408 when a head is not complete within its deadline, 414/431 for an oversize request
-//    line or head, 413 for an oversize body, 411 for a chunked body.
+//    line or head, 413 for an oversize body, 411 for a chunked body;
+//  - with TLS, runs each handshake on the poll thread too, non-blocking, under the same deadline
+//    and cap (http_transport.hpp): a stalled handshake is one more slow client.
 #include <sys/types.h>
 
 #include <atomic>
@@ -30,6 +32,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "http_transport.hpp"
 
 namespace naneye::daemon {
 
@@ -75,13 +79,21 @@ class RequestRunner {
  public:
   virtual ~RequestRunner() = default;
   // `request` holds exactly one request (head + body). False: close the connection.
-  virtual bool run(int fd, std::string_view request, bool close_after, bool& client_closes,
+  virtual bool run(Transport& io, std::string_view request, bool close_after, bool& client_closes,
                    std::chrono::milliseconds write_timeout) = 0;
 };
 
+// Sets the calling thread's nice value (the gate's threads yield to the pipeline's).
+void lower_priority(int nice);
+
 class Gate {
  public:
-  Gate(const GateLimits& limits, RequestRunner& runner, HttpCounters& counters);
+  // Connections accepted beyond the cap before the poll thread has had the chance to evict an idle
+  // one: past this the accept thread refuses on its own (bounds descriptors even if the poller lags).
+  static constexpr int kAdmitSlack = 16;
+
+  // `tls` null: plain HTTP; else every connection is a TLS session with that context.
+  Gate(const GateLimits& limits, RequestRunner& runner, HttpCounters& counters, const TlsContext* tls);
   ~Gate();
   Gate(const Gate&) = delete;
   Gate& operator=(const Gate&) = delete;
@@ -98,9 +110,11 @@ class Gate {
  private:
   struct Conn {
     int fd = -1;
-    std::string buf;   // bytes received and not yet served
-    bool idle = true;  // between requests (no byte of the next one yet)
-    bool eof = false;  // the client closed its side
+    std::unique_ptr<Transport> io;
+    std::string buf;          // bytes received and not yet served
+    bool idle = true;         // between requests (no byte of the next one yet)
+    bool eof = false;         // the client closed its side
+    bool want_write = false;  // TLS: the next step waits for the socket to take bytes
     int served = 0;
     std::chrono::steady_clock::time_point deadline, since;
   };
@@ -108,13 +122,14 @@ class Gate {
   void worker_loop();
   // Reads what `c` has; false when the connection is finished (closed or answered and closed).
   bool on_readable(Conn& c);
-  void refuse(int fd, int status, const char* error, const char* detail);
-  void close_conn(int fd);
+  void refuse(Conn& c, int status, const char* error, const char* detail);
+  void close_conn(Conn& c);
   void wake();
 
   GateLimits limits_;
   RequestRunner& runner_;
   HttpCounters& counters_;
+  const TlsContext* tls_;
   int cap_;
   int wake_fd_ = -1;  // eventfd: admissions and returns from workers
   std::atomic<bool> stop_{false};

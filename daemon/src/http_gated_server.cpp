@@ -37,12 +37,12 @@ std::string ip_of(const sockaddr_storage& a, int& port) {
 }
 
 // One request the gate has fully received, as the httplib Stream that process_request parses: reads
-// come from that buffer only (a handler never waits for client bytes), writes go to the socket, each
-// within the write timeout.
+// come from that buffer only (a handler never waits for client bytes), writes go to the connection
+// (socket or TLS session), each within the write timeout.
 class RequestStream final : public httplib::Stream {
  public:
-  RequestStream(int fd, std::string_view request, std::chrono::milliseconds write_timeout)
-      : fd_(fd), in_(request), write_timeout_(write_timeout) {}
+  RequestStream(Transport& io, std::string_view request, std::chrono::milliseconds write_timeout)
+      : io_(io), fd_(io.fd()), in_(request), write_timeout_(write_timeout) {}
 
   bool is_readable() const override { return pos_ < in_.size(); }
   bool is_writable() const override {
@@ -57,23 +57,7 @@ class RequestStream final : public httplib::Stream {
     return static_cast<ssize_t>(n);
   }
   ssize_t write(const char* ptr, size_t size) override {
-    const auto until = std::chrono::steady_clock::now() + write_timeout_;
-    std::size_t done = 0;
-    while (done < size) {
-      const ssize_t n = ::send(fd_, ptr + done, size - done, MSG_NOSIGNAL | MSG_DONTWAIT);
-      if (n > 0) {
-        done += static_cast<std::size_t>(n);
-        continue;
-      }
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK) return -1;
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
-      if (left.count() <= 0) return -1;  // a client that does not read is not waited for
-      pollfd p{fd_, POLLOUT, 0};
-      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0 || (p.revents & (POLLERR | POLLHUP))) return -1;
-    }
-    return static_cast<ssize_t>(size);
+    return io_.write_all(ptr, size, write_timeout_) ? static_cast<ssize_t>(size) : -1;
   }
   void get_remote_ip_and_port(std::string& ip, int& port) const override {
     sockaddr_storage a{};
@@ -88,6 +72,7 @@ class RequestStream final : public httplib::Stream {
   socket_t socket() const override { return fd_; }
 
  private:
+  Transport& io_;
   int fd_;
   std::string_view in_;
   std::size_t pos_ = 0;
@@ -98,14 +83,15 @@ class RequestStream final : public httplib::Stream {
 
 class GatedServer final : public httplib::Server, public RequestRunner {
  public:
-  GatedServer(const GateLimits& limits, HttpCounters& counters) : gate_(limits, *this, counters) {
+  GatedServer(const GateLimits& limits, HttpCounters& counters, const TlsContext* tls)
+      : gate_(limits, *this, counters, tls) {
     new_task_queue = [] { return new InlineQueue; };
   }
   Gate& gate() { return gate_; }
 
-  bool run(int fd, std::string_view request, bool close_after, bool& client_closes,
+  bool run(Transport& io, std::string_view request, bool close_after, bool& client_closes,
            std::chrono::milliseconds write_timeout) override {
-    RequestStream strm(fd, request, write_timeout);
+    RequestStream strm(io, request, write_timeout);
     return process_request(strm, close_after, client_closes, nullptr);
   }
 
@@ -124,8 +110,8 @@ class GatedServer final : public httplib::Server, public RequestRunner {
 };
 
 std::unique_ptr<httplib::Server> make_gated_server(const GateLimits& limits, HttpCounters& counters,
-                                                   Gate*& gate) {
-  auto server = std::make_unique<GatedServer>(limits, counters);
+                                                   const TlsContext* tls, Gate*& gate) {
+  auto server = std::make_unique<GatedServer>(limits, counters, tls);
   gate = &server->gate();
   return server;
 }

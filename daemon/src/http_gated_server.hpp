@@ -8,8 +8,9 @@
 
 namespace naneye::daemon::http {
 
-// `gate` is set to the server's gate (owned by the server; start() it before listening).
+// `gate` is set to the server's gate (owned by the server; start() it before listening). `tls` null:
+// plain HTTP; else it must outlive the server.
 std::unique_ptr<httplib::Server> make_gated_server(const GateLimits& limits, HttpCounters& counters,
-                                                   Gate*& gate);
+                                                   const TlsContext* tls, Gate*& gate);
 
 }  // namespace naneye::daemon::http

@@ -49,6 +49,8 @@ std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Publ
 void append_with_age(std::string& out, double age_ms, const std::string& result_json);
 
 nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s);
+// Removes from every text of `status` the folders of the files it names (calibration, capture).
+void redact_paths(nlohmann::json& status, const HttpContext& ctx, const PipelineStatus& s);
 std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s);
 
 void add_status_routes(httplib::Server& svr, HttpContext& ctx);     // status, healthz, readyz, metrics
@@ -72,5 +74,7 @@ bool read_latest_with_map(const Pipeline& pipeline, Fn&& fn) {
 void add_frame_routes(httplib::Server& svr, HttpContext& ctx);  // frames/left.png, right.png
 void add_event_routes(httplib::Server& svr, HttpContext& ctx);  // events (SSE)
 void add_web_routes(httplib::Server& svr);                      // the viewer: /, /web/*
+// The page that trades the token for the viewer's session cookie (daemon/web/login.html).
+void serve_login(httplib::Response& res);
 
 }  // namespace naneye::daemon::http

@@ -10,8 +10,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "http_access.hpp"
 #include "http_gated_server.hpp"
 #include "http_internal.hpp"
+#include "http_transport.hpp"
 #include "naneye/daemon/result_json.hpp"
 
 namespace naneye::daemon {
@@ -155,6 +157,23 @@ void lower_this_thread_priority() {
   setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kHttpNice);
 }
 
+// Said at every start, loudly, because the unit's IPAddressAllow is the only other guard.
+void warn_about_access(const Settings& s, const Access& access) {
+  auto log = spdlog::get("daemon");
+  if (!log || access.loopback_bind()) return;
+  if (!access.token_required()) {
+    log->warn(
+        "!!! http: serving {} beyond loopback WITHOUT A TOKEN: anyone who can reach port {} reads the "
+        "camera and its depth; set http.token_file (docs/http-api.md, Access)",
+        s.http_host, s.http_port);
+  } else if (s.http_tls_cert.empty()) {
+    log->warn(
+        "http: serving {} beyond loopback without TLS: the token crosses the network in clear; set "
+        "http.tls_cert and http.tls_key",
+        s.http_host);
+  }
+}
+
 }  // namespace
 
 }  // namespace http
@@ -175,7 +194,12 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   // rate). An idle connection costs no thread (it waits in the gate), so 100 only bounds how long
   // one connection keeps its place.
   limits.keep_alive_max = 100;
-  server_ = http::make_gated_server(limits, ctx_->connections, gate_);
+  if (!settings.http_tls_cert.empty())
+    tls_ =
+        std::make_unique<http::TlsContext>(settings.http_tls_cert.string(), settings.http_tls_key.string());
+  access_ = std::make_unique<http::Access>(settings);
+  http::warn_about_access(settings, *access_);
+  server_ = http::make_gated_server(limits, ctx_->connections, tls_.get(), gate_);
   // Only for the Keep-Alive header httplib writes: the gate enforces both.
   server_->set_keep_alive_timeout(std::max<time_t>(1, settings.http_idle_timeout_ms / 1000));
   server_->set_keep_alive_max_count(static_cast<std::size_t>(limits.keep_alive_max));
@@ -189,10 +213,16 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
     listen_fd_ = sock;
   });
   // Counted before the handler runs, so that a client that got its answer also sees it counted.
-  server_->set_pre_routing_handler([ctx = ctx_.get()](const httplib::Request& req, httplib::Response& res) {
-    ctx->requests.fetch_add(1, std::memory_order_relaxed);
-    return http::reject_bad_encoding(req, res) ? httplib::Server::HandlerResponse::Handled
-                                               : httplib::Server::HandlerResponse::Unhandled;
+  // Bad bytes first (nothing of them reaches a body), then who is asking (http_access.hpp).
+  server_->set_pre_routing_handler(
+      [ctx = ctx_.get(), access = access_.get()](const httplib::Request& req, httplib::Response& res) {
+        ctx->requests.fetch_add(1, std::memory_order_relaxed);
+        return http::reject_bad_encoding(req, res) || !access->admit(req, res)
+                   ? httplib::Server::HandlerResponse::Handled
+                   : httplib::Server::HandlerResponse::Unhandled;
+      });
+  server_->Post("/v1/session", [access = access_.get()](const httplib::Request& req, httplib::Response& res) {
+    access->open_session(req, res);
   });
   http::add_status_routes(*server_, *ctx_);
   http::add_depth_routes(*server_, *ctx_);
@@ -250,6 +280,7 @@ int HttpServer::bind() {
   }
   // Linux updates the backlog of a socket that already listens.
   if (listen_fd_ >= 0) ::listen(listen_fd_, SOMAXCONN);
+  access_->set_port(port);
   return port;
 }
 

@@ -1,6 +1,8 @@
 // /v1/status, /healthz, /readyz.
+#include <algorithm>
 #include <cmath>
 
+#include "http_access.hpp"
 #include "http_internal.hpp"
 
 namespace naneye::daemon::http {
@@ -31,7 +33,43 @@ nlohmann::json scene_json(const PipelineStatus& s) {
           {"dense_pairs", s.dense_pairs}};
 }
 
+// The folder (with its trailing '/') of a file:// URI's path, or empty.
+std::string folder_of_uri(const std::string& uri) {
+  constexpr std::string_view scheme = "file://";
+  if (uri.compare(0, scheme.size(), scheme) != 0) return {};
+  const std::string path = uri.substr(scheme.size(), uri.find('?') - scheme.size());
+  const auto slash = path.rfind('/');
+  return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+void strip_folders(nlohmann::json& j, const std::vector<std::string>& folders) {
+  if (j.is_string()) {
+    auto s = j.get<std::string>();
+    for (const auto& f : folders)
+      for (auto at = s.find(f); at != std::string::npos; at = s.find(f, at)) s.erase(at, f.size());
+    j = std::move(s);
+  } else if (j.is_structured()) {
+    for (auto& v : j) strip_folders(v, folders);
+  }
+}
+
 }  // namespace
+
+void redact_paths(nlohmann::json& status, const HttpContext& ctx, const PipelineStatus& s) {
+  // Every folder a status text can name: the calibration files', the sample capture's and the
+  // source's. Removed wherever they occur (URIs, the fallback's reason, error texts), leaving the
+  // file names, which say what is in use without mapping the machine.
+  std::vector<std::string> folders;
+  for (const auto& f : ctx.settings.calibration) folders.push_back(f.parent_path().string() + "/");
+  if (!ctx.settings.sample_capture.empty())
+    folders.push_back(ctx.settings.sample_capture.parent_path().string() + "/");
+  for (const auto* uri : {&ctx.settings.source_uri, &s.choice.uri}) folders.push_back(folder_of_uri(*uri));
+  if (s.info) folders.push_back(folder_of_uri(s.info->uri));
+  std::erase_if(folders, [](const std::string& f) { return f.size() <= 1; });
+  // Longest first, so that a folder inside another is not cut in half.
+  std::sort(folders.begin(), folders.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  strip_folders(status, folders);
+}
 
 nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
   nlohmann::json source{
@@ -83,7 +121,8 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
             {"refused", ctx.connections.refused.load()},
             {"idle_evicted", ctx.connections.idle_evicted.load()},
             {"head_timeouts", ctx.connections.head_timeouts.load()},
-            {"oversize", ctx.connections.oversize.load()}}},
+            {"oversize", ctx.connections.oversize.load()},
+            {"tls_failures", ctx.connections.tls_failures.load()}}},
           {"events",
            {{"clients", ctx.sse_clients.load()},
             {"clients_dropped", ctx.sse_dropped.load()},
@@ -93,7 +132,11 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
 void add_status_routes(httplib::Server& svr, HttpContext& ctx) {
   svr.Get("/v1/status", [&ctx](const httplib::Request& req, httplib::Response& res) {
     if (!only_params(req, res, {})) return;
-    send_json(res, status_json(ctx, ctx.pipeline->status()));
+    const auto s = ctx.pipeline->status();
+    auto j = status_json(ctx, s);
+    // Absolute paths tell a remote client how the machine is laid out: loopback clients only.
+    if (!is_loopback(req.remote_addr)) redact_paths(j, ctx, s);
+    send_json(res, j);
   });
   svr.Get("/healthz", [](const httplib::Request& req, httplib::Response& res) {
     if (!only_params(req, res, {})) return;

@@ -37,6 +37,17 @@ void serve(httplib::Response& res, const web::Asset& a) {
 
 }  // namespace
 
+void serve_login(httplib::Response& res) {
+  const auto* a = find_asset("login.html");
+  if (!a) return send_error(res, 401, "unauthorized", "this server needs its token");
+  // As the viewer's policy, but its one form may post (to this origin only).
+  res.set_header("Content-Security-Policy",
+                 "default-src 'none'; form-action 'self'; frame-ancestors 'none'; base-uri 'none'");
+  res.set_header("X-Content-Type-Options", "nosniff");
+  res.set_header("Cache-Control", "no-store");
+  set_body(res, std::string(a->data), content_type(a->name));
+}
+
 void add_web_routes(httplib::Server& svr) {
   svr.Get("/", [](const httplib::Request& req, httplib::Response& res) {
     if (!only_params(req, res, {})) return;

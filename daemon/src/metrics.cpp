@@ -64,6 +64,8 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
           h.head_timeouts.load());
   counter(os, "naneye_http_oversize_total", "Requests refused for their size or framing (411/413/414/431).",
           h.oversize.load());
+  counter(os, "naneye_http_tls_failures_total", "TLS handshakes that failed (bad client hello, not TLS).",
+          h.tls_failures.load());
   counter(os, "naneye_depth_served_total", "Results served by /v1/depth (status 200).",
           ctx.depth_served.load());
   gauge(os, "naneye_sensor_fps_left", "Frame rate of the left sensor (its own clock).", s.fps_left);

@@ -161,7 +161,8 @@ int main(int argc, char** argv) {
     const int port = server.bind();
     server.start();
     pipeline.start();
-    logger->info("listening on http://{}:{}/ (try /v1/status, /v1/depth)", settings.http_host, port);
+    logger->info("listening on {}://{}:{}/ (try /v1/status, /v1/depth)",
+                 settings.http_tls_cert.empty() ? "http" : "https", settings.http_host, port);
     sd_notifyf(0, "READY=1\nSTATUS=serving on %s:%d, source %s", settings.http_host.c_str(), port,
                choice.uri.c_str());
 

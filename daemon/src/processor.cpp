@@ -14,6 +14,8 @@ void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out) 
   out.pair = pair.index;
   out.t_left_ns = pair.left.sensor_ns;
   out.t_right_ns = pair.right.sensor_ns;
+  out.reference_left = driver::to_string(pair.left.reference);
+  out.reference_right = driver::to_string(pair.right.reference);
   out.board_found = false;
   out.point_count = 0;
   out.board.reset();

@@ -31,6 +31,8 @@ nlohmann::json result_to_json(const recon::PairResult& r) {
   j["t_left_ns"] = r.t_left_ns;
   j["t_right_ns"] = r.t_right_ns;
   j["board_found"] = r.board_found;
+  const auto text = [](const char* s) { return s ? nlohmann::json(s) : nlohmann::json(nullptr); };
+  j["reference"] = {{"left", text(r.reference_left)}, {"right", text(r.reference_right)}};
   nlohmann::json pts = nlohmann::json::array();
   for (int i = 0; i < r.point_count; ++i) {
     const auto& p = r.points[static_cast<std::size_t>(i)];
@@ -68,6 +70,19 @@ nlohmann::json result_to_json(const recon::PairResult& r) {
   return j;
 }
 
+namespace {
+
+// The static string of a reference-check outcome read back ("passed", "failed", "not_checked").
+const char* reference_text(const nlohmann::json& j) {
+  if (j.is_null()) return nullptr;
+  const auto s = j.get<std::string>();
+  for (const char* known : {"passed", "failed", "not_checked"})
+    if (s == known) return known;
+  throw std::invalid_argument("reference: \"" + s + "\" is not passed, failed or not_checked");
+}
+
+}  // namespace
+
 nlohmann::json result_to_json(const recon::PairResult& r, const SceneResult& scene) {
   nlohmann::json j = result_to_json(r);
   if (scene.computed)
@@ -82,6 +97,10 @@ recon::PairResult result_from_json(const nlohmann::json& j) {
   r.t_left_ns = j.at("t_left_ns").get<std::int64_t>();
   r.t_right_ns = j.at("t_right_ns").get<std::int64_t>();
   r.board_found = j.at("board_found").get<bool>();
+  if (const auto it = j.find("reference"); it != j.end()) {
+    r.reference_left = reference_text(it->at("left"));
+    r.reference_right = reference_text(it->at("right"));
+  }
   const auto& pts = j.at("points");
   if (pts.size() > static_cast<std::size_t>(recon::kMaxCorners)) {
     throw std::invalid_argument("points: more than " + std::to_string(recon::kMaxCorners));

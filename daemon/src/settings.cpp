@@ -90,6 +90,18 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
       {"http.max_connections", integer(s.http_max_connections, 1, 65536)},
       {"http.head_timeout_ms", integer(s.http_head_timeout_ms, 50, 60'000)},
       {"http.idle_timeout_ms", integer(s.http_idle_timeout_ms, 50, 3'600'000)},
+      {"http.token_file",
+       [&s, base](const toml::node& n, const std::string& k) {
+         s.http_token_file = resolve(base, get_string(n, k));
+       }},
+      {"http.tls_cert",
+       [&s, base](const toml::node& n, const std::string& k) {
+         s.http_tls_cert = resolve(base, get_string(n, k));
+       }},
+      {"http.tls_key",
+       [&s, base](const toml::node& n, const std::string& k) {
+         s.http_tls_key = resolve(base, get_string(n, k));
+       }},
       {"pipeline.corner_sigma_px",
        [&s](const toml::node& n, const std::string& k) { s.corner_sigma_px = get_double(n, k, 1e-4, 10.0); }},
       {"pipeline.max_result_age_ms", integer(s.max_result_age_ms, 1, 3'600'000)},
@@ -215,6 +227,14 @@ void validate(const Settings& s) {
     fail("source.sample_capture", "no such file: " + s.sample_capture.string());
   }
   if (s.http_host.empty()) fail("http.host", "must not be empty");
+  if (!s.http_token_file.empty() && !std::filesystem::is_regular_file(s.http_token_file))
+    fail("http.token_file", "no such file: " + s.http_token_file.string());
+  if (s.http_tls_cert.empty() != s.http_tls_key.empty())
+    fail(s.http_tls_cert.empty() ? "http.tls_cert" : "http.tls_key",
+         "http.tls_cert and http.tls_key go together");
+  for (const auto& [key, f] :
+       {std::pair{"http.tls_cert", &s.http_tls_cert}, std::pair{"http.tls_key", &s.http_tls_key}})
+    if (!f->empty() && !std::filesystem::is_regular_file(*f)) fail(key, "no such file: " + f->string());
   if (s.sse_max_clients >= s.http_threads) {
     fail("pipeline.sse_max_clients", "must be below http.threads (each event stream holds a thread), got " +
                                          std::to_string(s.sse_max_clients) +

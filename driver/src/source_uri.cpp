@@ -243,6 +243,9 @@ V4l2Uri parse_v4l2_uri(const SourceUri& uri) {
     if (!u.format) bad_value(uri, "format", *v, "Y10, Y16, GREY, SGRBG10");
   }
   u.stream = parse_stream_params(uri);
+  // A grabber may crop or process the reference pixels: checked only when the URI says they are
+  // there (`reference=check` or `reject`), never assumed.
+  if (!uri.param("reference")) u.stream.parser.reference.enabled = false;
   if (u.format == V4l2Format::sgrbg10 && !uri.param("color")) u.stream.parser.color = ColorMode::bayer_grbg;
   return u;
 }

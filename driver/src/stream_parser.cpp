@@ -177,11 +177,10 @@ void StreamParser::finish_record() {
   Frame& f = *frame_;
   frame_ = nullptr;
   std::uint16_t* px = f.pixels.data();
-  // Still in wire order here (bytes as received), whatever the host's endianness.
-  f.reference_ok = reference_ok(reinterpret_cast<const std::uint8_t*>(px));
   if constexpr (std::endian::native == std::endian::big)
     for (std::size_t i = 0; i < pixel_count_; ++i)
       px[i] = static_cast<std::uint16_t>(px[i] >> 8 | px[i] << 8);
+  f.reference = check_reference(px, settings_.sensor_size, settings_.reference);
   f.host_ns = host_ns_;
   f.color = settings_.color;
 
@@ -207,7 +206,8 @@ void StreamParser::finish_record() {
       }
     }
   }
-  if (!f.reference_ok) {
+  if (f.reference == ReferenceStatus::not_checked) AtomicCounters::add(counters_.reference_unchecked);
+  if (f.reference == ReferenceStatus::failed) {
     AtomicCounters::add(counters_.reference_failures);
     if (settings_.reference.reject) {
       sink_.abort_frame(f);
@@ -228,6 +228,16 @@ bool StreamParser::reference_ok(const std::uint8_t* pixel_bytes) const {
   const std::size_t last = (s - 1) * s;
   return px(0) <= rc.black_max && px(2) <= rc.black_max && px(1) >= rc.white_min && px(3) >= rc.white_min &&
          px(last + s - 4) <= rc.black_max && px(last + s - 3) >= rc.white_min;
+}
+
+ReferenceStatus check_reference(const std::uint16_t* px, int sensor_size, const ReferenceCheck& rc) {
+  if (!rc.enabled) return ReferenceStatus::not_checked;
+  const auto s = static_cast<std::size_t>(sensor_size);
+  const std::size_t last = (s - 1) * s;
+  const bool ok = px[0] <= rc.black_max && px[2] <= rc.black_max && px[1] >= rc.white_min &&
+                  px[3] >= rc.white_min && px[last + s - 4] <= rc.black_max &&
+                  px[last + s - 3] >= rc.white_min;
+  return ok ? ReferenceStatus::passed : ReferenceStatus::failed;
 }
 
 void StreamParser::finish(std::int64_t host_ns) {

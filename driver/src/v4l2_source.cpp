@@ -166,8 +166,19 @@ class V4l2Source final : public FrameSource {
                 1'000'000'000;
     f.ticks = static_cast<std::uint32_t>(f.ticks64);
     f.host_ns = host_ns;
-    f.reference_ok = true;
     f.color = color_;
+    // Only where the URI says this grabber carries the sensor's reference pixels
+    // (`reference=check|reject`): otherwise the frame says not_checked, never passed.
+    f.reference = check_reference(f.pixels.data(), kSensorSize, s_.reference);
+    if (f.reference == ReferenceStatus::not_checked) AtomicCounters::add(counters_.reference_unchecked);
+    if (f.reference == ReferenceStatus::failed) AtomicCounters::add(counters_.reference_failures);
+  }
+
+  // With `reference=reject`, a pair with an eye that failed the check is not delivered (the pair
+  // goes back to the pool when `p` is dropped).
+  bool rejected(const StereoPair& p) const {
+    return s_.reference.reject &&
+           (p.left.reference == ReferenceStatus::failed || p.right.reference == ReferenceStatus::failed);
   }
 
   void handle(const Dequeued& d) {
@@ -193,6 +204,7 @@ class V4l2Source final : public FrameSource {
       stamp(f, eye == 0 ? Sensor::left : Sensor::right, d, host_ns);
     }
     AtomicCounters::add(counters_.records, 2);
+    if (rejected(*p)) return;
     deliver(std::move(p));
   }
 
@@ -209,6 +221,10 @@ class V4l2Source final : public FrameSource {
         Frame& f = right ? pending_->right : pending_->left;
         v4l2_detail::unpack_eye(img, dev_.stride(), dev_.format(), 0, 0, f);
         stamp(f, eye, d, host_ns);
+        if (rejected(*pending_)) {
+          pending_.reset();
+          return;
+        }
         deliver(std::move(pending_));
         return;
       }
@@ -267,6 +283,7 @@ V4l2Settings v4l2_settings_from(const V4l2Uri& uri) {
   s.layout = uri.layout;
   s.format = uri.format;
   s.color = uri.stream.parser.color;
+  s.reference = uri.stream.parser.reference;
   s.pair_tolerance = std::chrono::nanoseconds(uri.stream.pairer.tolerance_ns);
   s.ring_size = uri.stream.ring_capacity;
   s.pool_size = uri.stream.ring_capacity + uri.stream.consumer_hold + 2;

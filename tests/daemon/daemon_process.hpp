@@ -53,11 +53,14 @@ class DaemonProcess {
     }
   }
 
-  // The PORT of the log line "listening on http://HOST:PORT/", if there is one yet. (No std::regex:
+  // The PORT of the log line "listening on http[s]://HOST:PORT/", if there is one yet. (No std::regex:
   // GCC 12 trips -Wmaybe-uninitialized in it under ASan at -O2.)
   static std::optional<int> listening_port(const std::string& text) {
-    const std::string key = "listening on http://";
-    const auto at = text.find(key);
+    const std::string scheme = "listening on http";
+    const auto on = text.find(scheme);
+    if (on == std::string::npos) return std::nullopt;
+    const std::string key = "://";
+    const auto at = text.find(key, on);
     if (at == std::string::npos) return std::nullopt;
     const auto colon = text.find(':', at + key.size());
     const auto slash = text.find('/', at + key.size());

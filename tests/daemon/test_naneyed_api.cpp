@@ -27,11 +27,13 @@ TEST_F(NaneyedTest, ServesEveryEndpointWhileStreamingARealTimeReplay) {
   EXPECT_NEAR(st["fps"]["right"].get<double>(), truth.fps(), 0.5);
   EXPECT_NEAR(st["offset_ms"].get<double>(), truth.offset_ns() * 1e-6, 1e-3);
   for (const char* c : {"bytes", "records", "sync_losses", "seq_gaps", "cut_records", "reference_failures",
-                        "unpaired", "pairs", "pairs_dropped", "reconnects", "transfer_errors", "stalls"}) {
+                        "reference_unchecked", "unpaired", "pairs", "pairs_dropped", "reconnects",
+                        "transfer_errors", "stalls"}) {
     EXPECT_TRUE(st["counters"].contains(c)) << c;
   }
   EXPECT_EQ(st["counters"]["sync_losses"], 0);
   EXPECT_EQ(st["counters"]["reference_failures"], 0);
+  EXPECT_EQ(st["counters"]["reference_unchecked"], 0);  // a file's records carry the reference pixels
   EXPECT_GE(st["counters"]["records"].get<int>(), 2 * st["counters"]["pairs"].get<int>());
   EXPECT_GE(
       st["counters"]["bytes"].get<std::int64_t>(),
@@ -46,6 +48,7 @@ TEST_F(NaneyedTest, ServesEveryEndpointWhileStreamingARealTimeReplay) {
   EXPECT_EQ(d["t_right_ns"].get<std::int64_t>() - d["t_left_ns"].get<std::int64_t>(), truth.offset_ns());
   EXPECT_GE(d["age_ms"].get<double>(), 0.0);
   EXPECT_EQ(d["board_found"], false);  // no corner detector wired in yet, and none is invented
+  EXPECT_EQ(d["reference"], nlohmann::json({{"left", "passed"}, {"right", "passed"}}));
   EXPECT_TRUE(d["board"].is_null());
   EXPECT_TRUE(d["metrics"].is_null());
   EXPECT_EQ(get_json("/v1/depth?max_age_ms=60000")["t_right_ns"].is_number(), true);

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
 
 using namespace naneye;
@@ -86,6 +87,27 @@ TEST(ResultJson, RoundTripsThroughText) {
   EXPECT_EQ(back.board->translation_mm, r.board->translation_mm);
   ASSERT_TRUE(back.metrics.has_value());
   EXPECT_EQ(back.metrics->reprojection_px, 0.05);
+}
+
+TEST(ResultJson, EachEyesReferenceCheckIsShownAsTheSourceReportedIt) {
+  // A V4L2 frame was "reference_ok" without any check; now a frame says what was checked, and the
+  // result carries it: passed, failed, or not_checked (never "passed" for a frame nobody looked at).
+  auto pair = std::make_unique<driver::StereoPair>();  // 250 kB of pixels: not on the stack
+  pair->left.reference = driver::ReferenceStatus::not_checked;
+  pair->right.reference = driver::ReferenceStatus::failed;
+  recon::PairResult r;
+  daemon::fill_pair_identity(*pair, r);
+  const auto j = daemon::result_to_json(r);
+  EXPECT_EQ(j.at("reference"), nlohmann::json({{"left", "not_checked"}, {"right", "failed"}}));
+  const auto back = daemon::result_from_json(j);
+  EXPECT_STREQ(back.reference_left, "not_checked");
+  EXPECT_STREQ(back.reference_right, "failed");
+  // A result that never came from a source says nothing.
+  EXPECT_EQ(daemon::result_to_json(recon::PairResult{}).at("reference"),
+            nlohmann::json({{"left", nullptr}, {"right", nullptr}}));
+  auto bad = j;
+  bad["reference"]["left"] = "ok";
+  EXPECT_THROW(daemon::result_from_json(bad), std::invalid_argument);
 }
 
 TEST(ResultJson, RefusesMalformedObjects) {

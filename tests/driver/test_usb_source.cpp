@@ -98,7 +98,8 @@ TEST(UsbSource, StreamsACaptureThroughTheRingBitExact) {
     EXPECT_TRUE(same_pixels(p->left, 0, 2 * i));
     EXPECT_TRUE(same_pixels(p->right, 1, 2 * i + 1));
     EXPECT_EQ(p->offset_ns(), 3'000'000);
-    EXPECT_TRUE(p->left.reference_ok && p->right.reference_ok);
+    EXPECT_EQ(p->left.reference, naneye::driver::ReferenceStatus::passed);
+    EXPECT_EQ(p->right.reference, naneye::driver::ReferenceStatus::passed);
   }
   EXPECT_GE(emu.max_in_flight(), 4u);
   // The base counts a pair just after handing it over: let the last increment land.

@@ -282,3 +282,93 @@ TEST(V4l2Source, NoFrameForTheStallTimeoutIsAStall) {
   EXPECT_EQ(c.pairs, 1u);
   EXPECT_EQ(emu.chosen_format(), fourcc(V4l2Format::y10));
 }
+
+namespace {
+
+// Writes the spec's reference pixels into one eye of a side-by-side Y10 frame: row 0 px 0..3 black,
+// white, black, white and row 249 px 246 black, 247 white; `good = false` whitens px 246.
+void set_reference(V4l2Frame& fr, int eye, bool good) {
+  const std::size_t w = 2 * kSensorSize, x0 = static_cast<std::size_t>(eye) * kSensorSize;
+  const auto at = [&](std::size_t r, std::size_t c) { return (r * w + x0 + c) * 2; };
+  const std::uint16_t black = 20, white = 1000;
+  for (std::size_t c = 0; c < 4; ++c) put(fr.image, at(0, c), V4l2Format::y10, c % 2 ? white : black);
+  put(fr.image, at(249, 246), V4l2Format::y10, good ? black : white);
+  put(fr.image, at(249, 247), V4l2Format::y10, white);
+}
+
+// Three side-by-side Y10 frames whose reference pixels pass, except frame 1's right eye.
+std::deque<V4l2Frame> frames_with_reference() {
+  std::deque<V4l2Frame> frames;
+  for (int i = 0; i < 3; ++i) {
+    frames.push_back(make_frame(V4l2Layout::side_by_side, V4l2Format::y10, i, i * kPeriodNs));
+    set_reference(frames.back(), 0, true);
+    set_reference(frames.back(), 1, i != 1);
+  }
+  return frames;
+}
+
+V4l2Settings from_uri(const std::string& uri) {
+  auto s = v4l2_settings_from(parse_v4l2_uri(parse_uri(uri)));
+  const auto fast = fast_settings(s.layout, s.format);
+  s.poll_timeout = fast.poll_timeout;
+  s.ring_size = fast.ring_size;
+  s.pool_size = fast.pool_size;
+  return s;
+}
+
+}  // namespace
+
+TEST(V4l2Source, ReferencePixelsAreNotCheckedUnlessTheUriSaysTheGrabberCarriesThem) {
+  // Every V4L2 frame was marked reference_ok = true without a look at its pixels, even frame 1,
+  // whose right eye fails the check.
+  V4l2Emulator emu;
+  V4l2DeviceSpec spec;
+  spec.formats = {V4L2_PIX_FMT_Y10};
+  emu.plug(spec, frames_with_reference());
+  auto src = make_v4l2_source(from_uri("v4l2:///dev/video0?format=Y10"));
+  src->start();
+  for (int i = 0; i < 3; ++i) {
+    PairPtr p = src->next(std::chrono::seconds(5));
+    ASSERT_TRUE(p) << i;
+    EXPECT_EQ(p->left.reference, ReferenceStatus::not_checked) << i;
+    EXPECT_EQ(p->right.reference, ReferenceStatus::not_checked) << i;
+  }
+  EXPECT_EQ(src->counters().reference_unchecked, 6u);
+  EXPECT_EQ(src->counters().reference_failures, 0u);
+}
+
+TEST(V4l2Source, WithReferenceCheckEachEyeSaysPassedOrFailed) {
+  V4l2Emulator emu;
+  V4l2DeviceSpec spec;
+  spec.formats = {V4L2_PIX_FMT_Y10};
+  emu.plug(spec, frames_with_reference());
+  auto src = make_v4l2_source(from_uri("v4l2:///dev/video0?format=Y10&reference=check"));
+  src->start();
+  const ReferenceStatus want_right[] = {ReferenceStatus::passed, ReferenceStatus::failed,
+                                        ReferenceStatus::passed};
+  for (int i = 0; i < 3; ++i) {
+    PairPtr p = src->next(std::chrono::seconds(5));
+    ASSERT_TRUE(p) << i;
+    EXPECT_EQ(p->left.reference, ReferenceStatus::passed) << i;
+    EXPECT_EQ(p->right.reference, want_right[i]) << i;
+  }
+  EXPECT_EQ(src->counters().reference_failures, 1u);
+  EXPECT_EQ(src->counters().reference_unchecked, 0u);
+}
+
+TEST(V4l2Source, WithReferenceRejectAFailingPairIsNotDelivered) {
+  V4l2Emulator emu;
+  V4l2DeviceSpec spec;
+  spec.formats = {V4L2_PIX_FMT_Y10};
+  emu.plug(spec, frames_with_reference());
+  auto src = make_v4l2_source(from_uri("v4l2:///dev/video0?format=Y10&reference=reject"));
+  src->start();
+  PairPtr a = src->next(std::chrono::seconds(5));
+  PairPtr b = src->next(std::chrono::seconds(5));
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->left.sensor_ns, 0);
+  EXPECT_EQ(b->left.sensor_ns, 2 * kPeriodNs);  // frame 1 was refused
+  EXPECT_EQ(b->right.reference, ReferenceStatus::passed);
+  EXPECT_EQ(src->counters().reference_failures, 1u);
+  EXPECT_EQ(src->counters().pairs, 2u);
+}

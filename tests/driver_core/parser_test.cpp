@@ -43,7 +43,7 @@ TEST(StreamParser, DeliversEveryRecordOfACleanStreamBitExact) {
   EXPECT_EQ(r.c().records, 6u);
   EXPECT_EQ(r.c().bytes, bytes.size());
   EXPECT_EQ(r.c().sync_losses + r.c().seq_gaps + r.c().cut_records + r.c().corrupt_records, 0u);
-  EXPECT_TRUE(r.sink.frames[0].reference_ok);
+  EXPECT_EQ(r.sink.frames[0].reference, ReferenceStatus::passed);
   EXPECT_EQ(r.sink.frames[0].host_ns, 7);
 }
 
@@ -150,8 +150,8 @@ TEST(StreamParser, ReferenceFailureIsCountedAndOptionallyRejected) {
   Harness keep;
   keep.feed(bytes, 50000);
   ASSERT_EQ(keep.sink.frames.size(), 4u);
-  EXPECT_FALSE(keep.sink.frames[1].reference_ok);
-  EXPECT_TRUE(keep.sink.frames[2].reference_ok);
+  EXPECT_EQ(keep.sink.frames[1].reference, ReferenceStatus::failed);
+  EXPECT_EQ(keep.sink.frames[2].reference, ReferenceStatus::passed);
   EXPECT_EQ(keep.c().reference_failures, 1u);
 
   ParserSettings s;
@@ -164,6 +164,25 @@ TEST(StreamParser, ReferenceFailureIsCountedAndOptionallyRejected) {
   Harness lax(s);
   lax.feed(bytes, 50000);
   EXPECT_EQ(lax.sink.frames.size(), 4u);
+}
+
+TEST(StreamParser, WithTheCheckOffAFrameSaysNotCheckedNeverPassed) {
+  // The bad reference pixel of record 1 goes through unseen, and no frame claims it was checked.
+  const auto recs = test::alternating(2);
+  auto bytes = test::build(recs);
+  bytes[kRecordSize + kHeaderSize + 2 * (249 * 250 + 247)] = 10;
+  bytes[kRecordSize + kHeaderSize + 2 * (249 * 250 + 247) + 1] = 0;
+  ParserSettings s;
+  s.reference.enabled = false;
+  Harness off(s);
+  off.feed(bytes, 50000);
+  ASSERT_EQ(off.sink.frames.size(), 4u);
+  for (const auto& f : off.sink.frames) EXPECT_EQ(f.reference, ReferenceStatus::not_checked);
+  EXPECT_EQ(off.c().reference_failures, 0u);
+  EXPECT_EQ(off.c().reference_unchecked, 4u);
+  Harness on;
+  on.feed(bytes, 50000);
+  EXPECT_EQ(on.c().reference_unchecked, 0u);
 }
 
 TEST(StreamParser, OutOfRangePixelsDropTheRecordButNotPadding) {

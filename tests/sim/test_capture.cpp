@@ -95,7 +95,8 @@ TEST(Capture, DriverParsesAndPairsItAsTheTruthSays) {
     EXPECT_NEAR(pairs[i]->left.sensor_ns - t0, t["t_left_ns"].get<double>(), 1.0);
     EXPECT_NEAR(pairs[i]->offset_ns(), t["t_right_ns"].get<double>() - t["t_left_ns"].get<double>(), 2.0);
     EXPECT_GT(pairs[i]->offset_ns(), 0);
-    EXPECT_TRUE(pairs[i]->left.reference_ok && pairs[i]->right.reference_ok);
+    EXPECT_EQ(pairs[i]->left.reference, naneye::driver::ReferenceStatus::passed);
+    EXPECT_EQ(pairs[i]->right.reference, naneye::driver::ReferenceStatus::passed);
     EXPECT_EQ(pairs[i]->left.ticks, t["t_left_ticks"].get<std::uint32_t>());
   }
   // The frame period stays inside the sensors' 43-62 fps.

@@ -41,7 +41,8 @@ TEST(SimSource, DeliversPairsThroughTheDriverPath) {
   for (const auto& p : pairs) {
     EXPECT_GT(p->offset_ns(), 0);
     EXPECT_LT(p->offset_ns(), 10'000'000);  // within half a frame period
-    EXPECT_TRUE(p->left.reference_ok && p->right.reference_ok);
+    EXPECT_EQ(p->left.reference, naneye::driver::ReferenceStatus::passed);
+    EXPECT_EQ(p->right.reference, naneye::driver::ReferenceStatus::passed);
   }
   // The same seed renders the same pairs.
   const auto again = take("sim://paper-d3?pairs=1&speed=max&seed=2&motion=sweep");

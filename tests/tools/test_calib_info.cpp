@@ -1,6 +1,9 @@
 // `naneye calib info`: the figures the issue asks for, read from the real binary's JSON.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
@@ -38,4 +41,43 @@ TEST(CalibInfo, MissingKeyNamesFileAndKey) {
   const auto r = run_cli("calib info " + path, true);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.out.find("naneye-partial.yaml: key 'M1': missing"), std::string::npos) << r.out;
+}
+
+namespace {
+
+// The bundled calibration with the right camera's k1 replaced, written to a temporary file.
+std::string paper_with_right_k1(const std::string& k1, const char* name) {
+  std::ifstream in(std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  const auto d2 = text.find("D2:");
+  const auto data = text.find("data: [", d2);
+  const auto comma = text.find(',', data);
+  text.replace(data + 7, comma - data - 7, " " + k1);
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+}  // namespace
+
+TEST(CalibInfo, RefusesWhatTheDaemonRefuses) {
+  // A distortion of 1e300 was described as if it were a camera (exit 0, a fold radius, a share).
+  const auto bad = paper_with_right_k1("1e300", "naneye-k1-1e300.yaml");
+  const auto r = run_cli("calib info " + bad, true);
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("naneye-k1-1e300.yaml: not a usable calibration: right camera: distortion "
+                       "coefficient 1e+300 beyond +-100"),
+            std::string::npos)
+      << r.out;
+}
+
+TEST(CalibExport, RefusesWhatTheDaemonRefuses) {
+  const auto bad = paper_with_right_k1("1e300", "naneye-export-1e300.yaml");
+  const std::string out = ::testing::TempDir() + "/naneye-export-refused";
+  const auto r = run_cli("calib export --format ros --out " + out + " " + bad, true);
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("not a usable calibration: right camera: distortion coefficient 1e+300"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(out + "/left.yaml")) << "nothing is written for it";
 }

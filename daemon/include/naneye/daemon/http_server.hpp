@@ -17,8 +17,10 @@ class Server;
 
 namespace naneye::daemon {
 namespace http {
+class Access;
 class Gate;
-}
+class TlsContext;
+}  // namespace http
 
 // The connection gate's figures (daemon/src/http_gate.hpp), read by /v1/status and /metrics.
 struct HttpCounters {
@@ -28,6 +30,7 @@ struct HttpCounters {
   std::atomic<std::uint64_t> idle_evicted{0};   // idle keep-alive connections closed for a newcomer
   std::atomic<std::uint64_t> head_timeouts{0};  // 408: request not received within http.head_timeout_ms
   std::atomic<std::uint64_t> oversize{0};       // 411/413/414/431/400 on the request's framing
+  std::atomic<std::uint64_t> tls_failures{0};   // TLS handshakes that failed (not a timeout)
 };
 
 // Shared by the handlers; counters are read by /v1/status and /metrics.
@@ -56,6 +59,7 @@ class HttpServer {
   HttpServer(const HttpServer&) = delete;
   HttpServer& operator=(const HttpServer&) = delete;
 
+  // Loads the token and the TLS certificate (throws std::runtime_error naming the file).
   // Binds settings.http_host:http_port (0: ephemeral) and returns the port; throws on failure.
   int bind();
   // Serves on its own thread (the accept loop), a poll thread reading request heads and a pool of
@@ -69,6 +73,9 @@ class HttpServer {
 
  private:
   std::unique_ptr<HttpContext> ctx_;
+  // Both outlive server_ (declared before it): its threads use them until it is destroyed.
+  std::unique_ptr<http::TlsContext> tls_;  // null: plain HTTP
+  std::unique_ptr<http::Access> access_;
   std::unique_ptr<httplib::Server> server_;
   http::Gate* gate_ = nullptr;  // owned by server_
   std::thread thread_;

@@ -30,6 +30,10 @@ struct Settings {
   int http_max_connections = 512;
   int http_head_timeout_ms = 2000;  // a request's head and body must arrive within this (else 408)
   int http_idle_timeout_ms = 5000;  // an idle keep-alive connection is closed after this
+  // Access (docs/http-api.md, "Access"): a file holding the bearer token every request must present
+  // (empty: no token); a PEM certificate chain and its key to serve HTTPS (both or neither).
+  std::filesystem::path http_token_file;
+  std::filesystem::path http_tls_cert, http_tls_key;
   // [pipeline]
   double corner_sigma_px = 0.05;        // corner noise used for the depth sigmas
   int max_result_age_ms = 500;          // /readyz fails when the latest result is older

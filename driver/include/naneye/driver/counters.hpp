@@ -11,8 +11,8 @@ namespace naneye::driver {
 
 struct AtomicCounters {
   std::atomic<std::uint64_t> bytes{0}, records{0}, sync_losses{0}, seq_gaps{0}, cut_records{0},
-      corrupt_records{0}, reference_failures{0}, unpaired{0}, pairs{0}, pairs_dropped{0}, reconnects{0},
-      transfer_errors{0}, stalls{0};
+      corrupt_records{0}, reference_failures{0}, reference_unchecked{0}, unpaired{0}, pairs{0},
+      pairs_dropped{0}, reconnects{0}, transfer_errors{0}, stalls{0};
 
   static void add(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) {
     c.fetch_add(n, std::memory_order_relaxed);
@@ -28,6 +28,7 @@ struct AtomicCounters {
     s.cut_records = r(cut_records);
     s.corrupt_records = r(corrupt_records);
     s.reference_failures = r(reference_failures);
+    s.reference_unchecked = r(reference_unchecked);
     s.unpaired = r(unpaired);
     s.pairs = r(pairs);
     s.pairs_dropped = r(pairs_dropped);

@@ -11,6 +11,15 @@ namespace naneye::driver {
 
 enum class ColorMode : std::uint8_t { mono, bayer_grbg };
 
+// The spec's reference-pixel sanity check of one frame. `not_checked` when the readout does not
+// carry those pixels or the check is off: nothing is claimed (V4L2 grabbers may crop them, so a
+// v4l2:// frame is checked only when its URI says `reference=check`).
+enum class ReferenceStatus : std::uint8_t { not_checked, passed, failed };
+
+constexpr const char* to_string(ReferenceStatus r) {
+  return r == ReferenceStatus::passed ? "passed" : r == ReferenceStatus::failed ? "failed" : "not_checked";
+}
+
 struct Frame {
   Sensor sensor = Sensor::left;
   std::uint8_t seq = 0;
@@ -18,7 +27,7 @@ struct Frame {
   std::uint64_t ticks64 = 0;   // extended across wraps, from the stream's first record
   std::int64_t sensor_ns = 0;  // ticks64 in ns
   std::int64_t host_ns = 0;    // CLOCK_MONOTONIC when the record's last byte arrived
-  bool reference_ok = true;    // the spec's reference-pixel sanity check
+  ReferenceStatus reference = ReferenceStatus::not_checked;
   ColorMode color = ColorMode::mono;
   // 250 x 250, row-major, 10-bit values. Column 249 and row 249 columns 248-249 are padding
   // (see is_padding()); their values are kept as received.

@@ -23,15 +23,16 @@ bool has_ended(SourceState s);
 // Every counter the parser, the pairer and the backend keep. Monotonic; read as a snapshot.
 struct SourceCounters {
   std::uint64_t bytes = 0;
-  std::uint64_t records = 0;             // complete records delivered by the parser
-  std::uint64_t sync_losses = 0;         // header not where expected: acquisition restarted
-  std::uint64_t seq_gaps = 0;            // records lost upstream (sum of seq jumps)
-  std::uint64_t cut_records = 0;         // records cut short, dropped
-  std::uint64_t corrupt_records = 0;     // pixel values above 1023 (misaligned or damaged bytes), dropped
-  std::uint64_t reference_failures = 0;  // reference-pixel check failed
-  std::uint64_t unpaired = 0;            // frames that found no partner within the tolerance
-  std::uint64_t pairs = 0;               // pairs handed to the consumer
-  std::uint64_t pairs_dropped = 0;       // oldest pairs dropped because the consumer fell behind
+  std::uint64_t records = 0;              // complete records delivered by the parser
+  std::uint64_t sync_losses = 0;          // header not where expected: acquisition restarted
+  std::uint64_t seq_gaps = 0;             // records lost upstream (sum of seq jumps)
+  std::uint64_t cut_records = 0;          // records cut short, dropped
+  std::uint64_t corrupt_records = 0;      // pixel values above 1023 (misaligned or damaged bytes), dropped
+  std::uint64_t reference_failures = 0;   // reference-pixel check failed
+  std::uint64_t reference_unchecked = 0;  // records delivered without a reference-pixel check
+  std::uint64_t unpaired = 0;             // frames that found no partner within the tolerance
+  std::uint64_t pairs = 0;                // pairs handed to the consumer
+  std::uint64_t pairs_dropped = 0;        // oldest pairs dropped because the consumer fell behind
   std::uint64_t reconnects = 0;
   std::uint64_t transfer_errors = 0;
   std::uint64_t stalls = 0;
@@ -48,6 +49,9 @@ void for_each_counter(const SourceCounters& c, F&& f) {
   f("cut_records", "Records cut short and dropped.", c.cut_records);
   f("corrupt_records", "Records with pixel values above 1023, dropped.", c.corrupt_records);
   f("reference_failures", "Records failing the reference-pixel check.", c.reference_failures);
+  f("reference_unchecked",
+    "Records whose reference pixels were not checked (not carried, or the check is off).",
+    c.reference_unchecked);
   f("unpaired", "Frames that found no partner within the tolerance.", c.unpaired);
   f("pairs", "Pairs handed to the consumer by the source.", c.pairs);
   f("pairs_dropped", "Oldest pairs dropped because the consumer fell behind.", c.pairs_dropped);

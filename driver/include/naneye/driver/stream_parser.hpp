@@ -26,8 +26,12 @@ struct ReferenceCheck {
   bool enabled = true;
   std::uint16_t black_max = 600;
   std::uint16_t white_min = 800;
-  bool reject = false;  // drop failing frames (they are counted either way; Frame::reference_ok)
+  bool reject = false;  // drop failing frames (they are counted either way; Frame::reference)
 };
+
+// The check on one frame's pixels (host order, `sensor_size` a side, row-major): not_checked when
+// `rc` is disabled.
+ReferenceStatus check_reference(const std::uint16_t* px, int sensor_size, const ReferenceCheck& rc);
 
 struct ParserSettings {
   // Pixels per side: 250 for NanEye Stereo; other NanEye 2D dies use 160 or 100 (any 4..250 works;

@@ -11,6 +11,7 @@
 
 #include "naneye/driver/frame_source.hpp"
 #include "naneye/driver/source_uri.hpp"
+#include "naneye/driver/stream_parser.hpp"
 
 namespace naneye::driver {
 
@@ -38,6 +39,9 @@ struct V4l2Settings {
   std::chrono::nanoseconds pair_tolerance{11'350'000};
   std::size_t pool_size = 8;
   std::size_t ring_size = 4;
+  // Off unless asked for: whether a grabber passes the sensor's reference pixels through (rather
+  // than cropping or processing them) is not known in general (docs/drivers.md).
+  ReferenceCheck reference{.enabled = false};
 };
 
 // The URI's device, layout, format, colour and pairing tolerance.

@@ -48,6 +48,10 @@ struct PairResult {
   const char* failure = nullptr;
   const char* failure_left = nullptr;
   const char* failure_right = nullptr;
+  // Each eye's reference-pixel check as the source reported it: "passed", "failed" or "not_checked"
+  // (static strings; null when the pair did not come from a source, e.g. a parsed result).
+  const char* reference_left = nullptr;
+  const char* reference_right = nullptr;
 };
 
 }  // namespace naneye::recon
