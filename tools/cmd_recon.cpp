@@ -189,22 +189,43 @@ daemon::Settings recon_settings(const ReconOptions& o) {
   return settings;
 }
 
+// The scene paths of one pair (--scene, --depth-out), the same for a source and for image files:
+// sparse and dense on one demosaic and noise estimate, the depth PNGs, the pair's report.
+class SceneStep {
+ public:
+  SceneStep(const ReconOptions& o, const recon::StereoRig& rig) : depth_out_(o.depth_out) {
+    if (!o.scene && depth_out_.empty()) return;
+    sparse_ = std::make_unique<recon::scene::SparseReconstructor>(rig);
+    dense_ = std::make_unique<recon::scene::DenseReconstructor>(rig);
+    if (!depth_out_.empty()) std::filesystem::create_directories(depth_out_);
+  }
+  void run(const recon::RawImageView& left, const recon::RawImageView& right, unsigned long long pair) {
+    if (!sparse_) return;
+    sparse_->load_luma(left, right);
+    sparse_->reconstruct(sparse_->luma(), sparse_result_);
+    dense_->reconstruct(sparse_->luma(), depth_);
+    if (!depth_out_.empty()) write_depth_pngs(depth_out_, pair, depth_, z16_, s16_);
+  }
+  void report(Report& report, const recon::PairResult& result) const {
+    report.pair(result, sparse_ ? &sparse_result_ : nullptr, sparse_ ? &depth_ : nullptr);
+  }
+
+ private:
+  std::string depth_out_;
+  std::unique_ptr<recon::scene::SparseReconstructor> sparse_;
+  std::unique_ptr<recon::scene::DenseReconstructor> dense_;
+  recon::scene::SparseResult sparse_result_;
+  recon::scene::DepthMap depth_;
+  cv::Mat z16_, s16_;
+};
+
 void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
   auto processor = daemon::make_processor(recon_settings(o));
   processor->set_rig(rig);
   auto source = daemon::make_source_registry().open(lossless_input_uri(o.input));
   source->start();
   auto result = std::make_unique<recon::PairResult>();
-  std::unique_ptr<recon::scene::SparseReconstructor> scene;
-  std::unique_ptr<recon::scene::DenseReconstructor> dense;
-  if (o.scene || !o.depth_out.empty()) {
-    scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
-    dense = std::make_unique<recon::scene::DenseReconstructor>(rig);
-  }
-  if (!o.depth_out.empty()) std::filesystem::create_directories(o.depth_out);
-  recon::scene::SparseResult scene_result;
-  recon::scene::DepthMap depth;
-  cv::Mat z16, s16;
+  SceneStep scene(o, rig);
   Report report(o.json);
   while (o.max_pairs < 0 || report.pairs() < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
@@ -213,15 +234,8 @@ void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
       continue;
     }
     processor->process(*pair, *result);
-    if (scene) {
-      // One demosaic and noise estimate for both paths.
-      scene->load_luma(frame_view(pair->left), frame_view(pair->right));
-      scene->reconstruct(scene->luma(), scene_result);
-      dense->reconstruct(scene->luma(), depth);
-      if (!o.depth_out.empty())
-        write_depth_pngs(o.depth_out, static_cast<unsigned long long>(result->pair), depth, z16, s16);
-    }
-    report.pair(*result, scene ? &scene_result : nullptr, scene ? &depth : nullptr);
+    scene.run(frame_view(pair->left), frame_view(pair->right), result->pair);
+    scene.report(report, *result);
   }
   source->stop();
   report.finish();
@@ -236,16 +250,7 @@ void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
   if (o.color != "mono" && o.color != "grbg") throw std::invalid_argument("--color: mono or grbg");
   io.color = o.color == "grbg" ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
   recon::StereoReconstructor reconstructor(rig, daemon::reconstructor_settings(recon_settings(o)));
-  std::unique_ptr<recon::scene::SparseReconstructor> scene;
-  std::unique_ptr<recon::scene::DenseReconstructor> dense;
-  if (o.scene || !o.depth_out.empty()) {
-    scene = std::make_unique<recon::scene::SparseReconstructor>(rig);
-    dense = std::make_unique<recon::scene::DenseReconstructor>(rig);
-  }
-  if (!o.depth_out.empty()) std::filesystem::create_directories(o.depth_out);
-  recon::scene::SparseResult scene_result;
-  recon::scene::DepthMap depth;
-  cv::Mat z16, s16;
+  SceneStep scene(o, rig);
   auto result = std::make_unique<recon::PairResult>();
   driver::Image10 left, right;
   Report report(o.json);
@@ -268,13 +273,8 @@ void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
     result->pair = i;
     const recon::RawImageView lv = image_view(left), rv = image_view(right);
     reconstructor.process(lv, rv, *result);
-    if (scene) {
-      scene->load_luma(lv, rv);
-      scene->reconstruct(scene->luma(), scene_result);
-      dense->reconstruct(scene->luma(), depth);
-      if (!o.depth_out.empty()) write_depth_pngs(o.depth_out, i, depth, z16, s16);
-    }
-    report.pair(*result, scene ? &scene_result : nullptr, scene ? &depth : nullptr);
+    scene.run(lv, rv, i);
+    scene.report(report, *result);
   }
   report.finish();
   if (report.pairs() == 0) throw std::runtime_error("no image pair could be read");
