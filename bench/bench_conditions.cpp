@@ -15,7 +15,7 @@
 
 #include "../tests/corners/corner_test_util.hpp"
 #include "../tests/corners/imaging_conditions.hpp"
-#include "naneye/recon/opencv_path.hpp"
+#include "naneye/recon/pair/opencv_path.hpp"
 
 namespace {
 

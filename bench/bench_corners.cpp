@@ -15,9 +15,9 @@
 #include <string>
 
 #include "../tests/corners/corner_test_util.hpp"
-#include "naneye/recon/corners.hpp"
-#include "naneye/recon/corners_coarse.hpp"
-#include "naneye/recon/corners_grid.hpp"
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/corners/coarse_grid.hpp"
+#include "naneye/recon/corners/grid.hpp"
 
 namespace {
 
@@ -186,7 +186,7 @@ void BM_OpenCV(benchmark::State& state, bool sb) {
 }
 
 // The full search's coarse grid step alone, on the luminance the detector computes: ours (saddle
-// lattice, corners_coarse.hpp) against the OpenCV search the detector used before (and keeps as an
+// lattice, corners/coarse_grid.hpp) against the OpenCV search the detector used before (and keeps as an
 // opt-in fallback). Counter: pairs whose both eyes gave a grid.
 void BM_CoarseGrid(benchmark::State& state, bool opencv) {
   const auto& eyes = dataset();

@@ -43,7 +43,7 @@
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "smooth_capture.hpp"
 
 extern char** environ;

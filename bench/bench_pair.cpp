@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/calibration_io.hpp"
-#include "naneye/recon/opencv_path.hpp"
-#include "naneye/recon/stereo_reconstructor.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/pair/opencv_path.hpp"
+#include "naneye/recon/pair/stereo_reconstructor.hpp"
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 #include "naneye/sim/sim_source.hpp"

@@ -18,8 +18,8 @@
 #include <random>
 #include <vector>
 
-#include "naneye/recon/calibration_io.hpp"
-#include "naneye/recon/triangulation.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/geometry/triangulation.hpp"
 
 namespace {
 

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 #include "naneye/sim/textured.hpp"

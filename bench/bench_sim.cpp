@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "naneye/driver/wire_format.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 #include "naneye/sim/sim_source.hpp"

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::tools {
 

@@ -14,7 +14,7 @@
 #include "cli_inputs.hpp"
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/source_select.hpp"
-#include "naneye/recon/corners_stereo.hpp"
+#include "naneye/recon/corners/stereo_ids.hpp"
 
 namespace naneye::tools {
 

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/calibrate.hpp"
-#include "naneye/recon/corners.hpp"
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/calibrate/calibrate.hpp"
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::tools {
 

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "naneye/recon/pair_result.hpp"
+#include "naneye/recon/pair/result.hpp"
 
 namespace naneye::tools {
 

@@ -10,9 +10,9 @@
 
 #include "calib_export.hpp"
 #include "commands.hpp"
-#include "naneye/recon/calibration_io.hpp"
-#include "naneye/recon/domain_report.hpp"
-#include "naneye/recon/rig_validate.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/camera/domain_report.hpp"
+#include "naneye/recon/camera/rig_validate.hpp"
 
 namespace naneye::tools {
 namespace {

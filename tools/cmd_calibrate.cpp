@@ -15,7 +15,7 @@
 #include "calibrate_views.hpp"
 #include "cli_inputs.hpp"
 #include "commands.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 
 namespace naneye::tools {

@@ -24,10 +24,10 @@
 #include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/driver/image_file.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
-#include "naneye/recon/stereo_reconstructor.hpp"
+#include "naneye/recon/pair/stereo_reconstructor.hpp"
 #include "scene_json.hpp"
 
 namespace naneye::tools {

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "naneye/driver/image_file.hpp"
-#include "naneye/recon/corners.hpp"
+#include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::tools {
 

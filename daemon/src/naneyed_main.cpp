@@ -20,7 +20,7 @@
 #include "naneye/daemon/settings.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/driver/wire_format.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/scene_json.hpp"
 #include "naneye/recon/scene/sparse.hpp"
-#include "naneye/recon/stereo_reconstructor.hpp"
+#include "naneye/recon/pair/stereo_reconstructor.hpp"
 
 namespace naneye::daemon {
 

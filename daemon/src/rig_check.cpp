@@ -1,6 +1,6 @@
 #include "naneye/daemon/rig_check.hpp"
 
-#include "naneye/recon/rig_validate.hpp"
+#include "naneye/recon/camera/rig_validate.hpp"
 
 namespace naneye::daemon {
 

@@ -4,7 +4,7 @@
 Renders one checkerboard corner the way naneye_sim does (each pixel the mean of 16 x 16 samples of
 the ideal pattern, then a Gaussian blur on the pixel grid), edges 88.9 degrees apart and slanted a
 few degrees to the grid, and fits the detector's model (a + b erf(u1 / sqrt2 s) erf(u2 / sqrt2 s))
-twice: sampled at the pixel centres (what recon/src/corners_fast_fit.cpp does) and averaged over
+twice: sampled at the pixel centres (what recon/corners/fast_fit.cpp does) and averaged over
 4 x 4 samples of the pixel. Prints, per blur, the RMS residual over the contrast and the corner's
 error, noise-free, mean of 6 random placements.
 

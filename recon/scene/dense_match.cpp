@@ -5,7 +5,7 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
-#include "naneye/recon/corners_noise.hpp"
+#include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 
 namespace naneye::recon::scene {

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "naneye/recon/triangulation.hpp"
+#include "naneye/recon/geometry/triangulation.hpp"
 
 namespace naneye::recon::scene {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "log.hpp"
 #include "naneye/driver/neyd.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 
 namespace naneye::sim {
 namespace {

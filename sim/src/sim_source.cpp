@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "log.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/stream.hpp"
 
 namespace naneye::sim {

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "../support/paper_rig.hpp"
-#include "naneye/recon/calibrate.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/calibrate/calibrate.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 

@@ -7,9 +7,9 @@
 #include <cstdio>
 
 #include "calib_scene.hpp"
-#include "naneye/recon/calibrate_bundle.hpp"
-#include "naneye/recon/corners.hpp"
-#include "naneye/recon/corners_stereo.hpp"
+#include "naneye/recon/calibrate/bundle.hpp"
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/corners/stereo_ids.hpp"
 
 using namespace naneye;
 

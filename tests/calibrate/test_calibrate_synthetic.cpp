@@ -7,7 +7,7 @@
 #include <cstdio>
 
 #include "calib_scene.hpp"
-#include "naneye/recon/calibrate_bundle.hpp"
+#include "naneye/recon/calibrate/bundle.hpp"
 
 using namespace naneye;
 

@@ -8,8 +8,8 @@
 #include <random>
 
 #include "../support/paper_rig.hpp"
-#include "naneye/recon/calibration_io.hpp"
-#include "naneye/recon/corners.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/corners/detector.hpp"
 #include "naneye/sim/render.hpp"
 
 namespace naneye::test {

@@ -1,4 +1,4 @@
-// The full-search coarse grid on its own (corners_coarse.hpp): every coarse corner near its true
+// The full-search coarse grid on its own (corners/coarse_grid.hpp): every coarse corner near its true
 // corner, each true corner taken once, the pattern size configurable, and nothing for a board of
 // another size or a frame without a board.
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "corner_test_util.hpp"
-#include "naneye/recon/corners_coarse.hpp"
+#include "naneye/recon/corners/coarse_grid.hpp"
 
 namespace naneye::recon {
 namespace {

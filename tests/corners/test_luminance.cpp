@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "naneye/recon/corners.hpp"
+#include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::recon {
 namespace {

@@ -1,4 +1,4 @@
-// The frame's noise model (corners_noise.hpp): var = a DN + b from one frame, board included.
+// The frame's noise model (corners/noise.hpp): var = a DN + b from one frame, board included.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "naneye/recon/corners_noise.hpp"
+#include "naneye/recon/corners/noise.hpp"
 
 namespace naneye::recon {
 namespace {

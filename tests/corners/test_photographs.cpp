@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/corners.hpp"
+#include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::recon {
 namespace {

@@ -1,4 +1,4 @@
-// The corner fit's vector kernels (recon/src/corners_simd.hpp): erf and exp(-z^2) against the C
+// The corner fit's vector kernels (recon/corners/simd.hpp): erf and exp(-z^2) against the C
 // library, the normal equations against a double-precision sum, and the 4-lane (SSE2) and 8-lane
 // (AVX2, when this CPU has it) builds of the whole fit against each other on rendered corners.
 #include <gtest/gtest.h>
@@ -8,9 +8,9 @@
 #include <random>
 #include <vector>
 
-#include "../../recon/src/corners_simd.hpp"
+#include "../../recon/corners/simd.hpp"
 #include "corner_test_util.hpp"
-#include "naneye/recon/corners_fast_fit.hpp"
+#include "naneye/recon/corners/fast_fit.hpp"
 
 namespace naneye::recon {
 namespace {

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "corner_test_util.hpp"
-#include "naneye/recon/corners_stereo.hpp"
+#include "naneye/recon/corners/stereo_ids.hpp"
 
 namespace naneye::recon {
 namespace {

@@ -12,7 +12,7 @@
 
 #include "naneye/driver/frame.hpp"
 #include "naneye/driver/wire_format.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/textured.hpp"
 
 namespace naneye::daemon::test {

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "naneye/daemon/depth_at.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 
 using namespace naneye;
 

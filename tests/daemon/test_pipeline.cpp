@@ -8,7 +8,7 @@
 #include "capture.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/source_select.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "scene_capture.hpp"
 #include "temp_dir.hpp"
 

@@ -3,7 +3,7 @@
 #include <csignal>
 
 #include "naneye/daemon/rig_check.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneyed_fixture.hpp"
 
 using namespace naneye::daemon::test;

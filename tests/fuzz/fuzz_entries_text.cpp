@@ -16,7 +16,7 @@
 #include "naneye/driver/image_source.hpp"
 #include "naneye/driver/source_uri.hpp"
 #include "naneye/driver/usb_profile.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 
 namespace naneye::fuzz {
 namespace {

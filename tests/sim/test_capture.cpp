@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "naneye/driver/source_registry.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/capture.hpp"
 
 namespace naneye::sim {

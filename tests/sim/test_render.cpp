@@ -5,7 +5,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "naneye/driver/source_registry.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/sim_source.hpp"
 
 namespace naneye::sim {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "naneye/driver/source_registry.hpp"
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/sim_source.hpp"
 #include "naneye/sim/textured.hpp"
 

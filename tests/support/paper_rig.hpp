@@ -3,7 +3,7 @@
 // rig the corner and calibration tests render and measure with.
 #include <filesystem>
 
-#include "naneye/recon/calibration_io.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 
 namespace naneye::test {
 

@@ -4,7 +4,7 @@
 // of this camera).
 #include <random>
 
-#include "naneye/recon/triangulation.hpp"
+#include "naneye/recon/geometry/triangulation.hpp"
 #include "study.hpp"
 
 namespace naneye::tools::study {

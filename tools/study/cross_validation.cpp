@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "format.hpp"
-#include "naneye/recon/calibrate.hpp"
+#include "naneye/recon/calibrate/calibrate.hpp"
 #include "paper_tables.hpp"
 #include "study.hpp"
 

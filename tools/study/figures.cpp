@@ -2,7 +2,7 @@
 // model's residual against radius (docs/img/*.png).
 #include <cmath>
 
-#include "naneye/recon/division_fit.hpp"
+#include "naneye/recon/paper/division_fit.hpp"
 #include "plot.hpp"
 #include "study.hpp"
 

@@ -2,10 +2,10 @@
 // against the truth (E).
 #include <cmath>
 
-#include "naneye/recon/division_triangulation.hpp"
-#include "naneye/recon/metrics.hpp"
-#include "naneye/recon/plane_sweep.hpp"
-#include "naneye/recon/triangulation.hpp"
+#include "naneye/recon/paper/division_triangulation.hpp"
+#include "naneye/recon/geometry/metrics.hpp"
+#include "naneye/recon/paper/plane_sweep.hpp"
+#include "naneye/recon/geometry/triangulation.hpp"
 #include "study.hpp"
 
 namespace naneye::tools::study {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "format.hpp"
-#include "naneye/recon/division_fit.hpp"
+#include "naneye/recon/paper/division_fit.hpp"
 #include "paper_tables.hpp"
 #include "study.hpp"
 

@@ -6,9 +6,9 @@
 #include <Eigen/Geometry>
 #include <cstdio>
 
-#include "naneye/recon/division_triangulation.hpp"
-#include "naneye/recon/metrics.hpp"
-#include "naneye/recon/plane_sweep.hpp"
+#include "naneye/recon/paper/division_triangulation.hpp"
+#include "naneye/recon/geometry/metrics.hpp"
+#include "naneye/recon/paper/plane_sweep.hpp"
 #include "study.hpp"
 
 namespace naneye::tools::study {

@@ -18,7 +18,7 @@
 #include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/settings.hpp"
 #include "naneye/driver/frame_source.hpp"
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::daemon {
 

@@ -8,10 +8,10 @@
 #include "naneye/daemon/scene_result.hpp"
 #include "naneye/daemon/settings.hpp"
 #include "naneye/driver/frame.hpp"
-#include "naneye/recon/corners.hpp"
-#include "naneye/recon/pair_result.hpp"
-#include "naneye/recon/rig.hpp"
-#include "naneye/recon/stereo_reconstructor.hpp"
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/pair/result.hpp"
+#include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/pair/stereo_reconstructor.hpp"
 
 namespace naneye::daemon {
 

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "naneye/daemon/scene_result.hpp"
-#include "naneye/recon/pair_result.hpp"
+#include "naneye/recon/pair/result.hpp"
 
 namespace naneye::daemon {
 

@@ -6,12 +6,12 @@
 #include <optional>
 #include <string>
 
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::daemon {
 
 // The first reason `rig` cannot be used with a `sensor_px` x `sensor_px` sensor, or nullopt: its
-// image size must be the sensor's, and recon::rig_problem (naneye/recon/rig_validate.hpp) must pass.
+// image size must be the sensor's, and recon::rig_problem (naneye/recon/camera/rig_validate.hpp) must pass.
 std::optional<std::string> rig_problem(const recon::StereoRig& rig, int sensor_px);
 
 }  // namespace naneye::daemon

@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/camera/rig.hpp"
 #include "naneye/sim/render.hpp"
 
 namespace naneye::sim {

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/camera/rig.hpp"
 #include "naneye/sim/render.hpp"
 #include "naneye/sim/sensor.hpp"
 

@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "naneye/recon/rig.hpp"
+#include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::recon::scene {
 

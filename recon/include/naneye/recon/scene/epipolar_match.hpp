@@ -8,7 +8,7 @@
 #include <array>
 #include <cstdint>
 
-#include "naneye/recon/camera.hpp"
+#include "naneye/recon/camera/camera_model.hpp"
 #include "naneye/recon/scene/features.hpp"
 
 namespace naneye::recon::scene {

@@ -1,0 +1,250 @@
+#include "naneye/recon/camera/calibration_io.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <optional>
+#include <sstream>
+
+namespace naneye::recon {
+namespace {
+
+// A matrix entry together with the file it came from, so that errors can name the file.
+struct Entry {
+  cv::Mat value;
+  std::string file;
+};
+
+[[noreturn]] void fail(const std::string& file, const std::string& key, const std::string& problem) {
+  throw CalibrationError(file + ": key '" + key + "': " + problem);
+}
+
+std::string shape_of(const cv::Mat& m) {
+  std::ostringstream s;
+  s << m.rows << "x" << m.cols;
+  return s.str();
+}
+
+bool same(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0.0;
+}
+
+class Keys {
+ public:
+  void read(const std::filesystem::path& path) {
+    const std::string file = path.string();
+    if (!std::filesystem::exists(path)) throw CalibrationError(file + ": file not found");
+    // A NUL byte is never in a FileStorage text (YAML, XML, JSON), and OpenCV 4.6's reader loops
+    // forever on one (fuzz_calib_yaml: a 492-byte file held FileStorage::open for minutes).
+    {
+      std::ifstream in(path, std::ios::binary);
+      if (std::find(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\0') !=
+          std::istreambuf_iterator<char>())
+        throw CalibrationError(file + ": holds a NUL byte: not an OpenCV FileStorage text file");
+    }
+    cv::FileStorage fs;
+    try {
+      if (!fs.open(file, cv::FileStorage::READ)) throw CalibrationError(file + ": cannot be opened");
+    } catch (const cv::Exception& e) {
+      throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.err);
+    } catch (const std::exception& e) {
+      // OpenCV's parser passes on what its own code throws (std::length_error for a length it
+      // computed from a damaged file, found by fuzz_calib_yaml).
+      throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.what());
+    }
+    const cv::FileNode root = fs.root();
+    // OpenCV's own reading of a damaged file can throw from anywhere in the walk (FileNode::name()
+    // asserted on a file the fuzzer wrote): every such failure is this file's, and said so.
+    try {
+      for (auto it = root.begin(); it != root.end(); ++it) {
+        const cv::FileNode node = *it;
+        const std::string key = node.name();
+        cv::Mat m;
+        try {
+          if (node.isInt() || node.isReal()) {
+            m = cv::Mat(1, 1, CV_64F, cv::Scalar(static_cast<double>(node)));
+          } else if (node.isMap() && !node["data"].empty()) {
+            const int rows = static_cast<int>(node["rows"]), cols = static_cast<int>(node["cols"]);
+            const std::size_t given = node["data"].size();
+            if (rows < 1 || cols < 1 || given != static_cast<std::size_t>(rows) * cols)
+              fail(file, key,
+                   "data has " + std::to_string(given) + " values but rows x cols is " +
+                       std::to_string(rows) + "x" + std::to_string(cols));
+            node >> m;
+          } else {
+            continue;  // strings, comments and other keys that are not ours
+          }
+        } catch (const cv::Exception& e) {
+          fail(file, key, "not a matrix: " + e.err);
+        }
+        if (m.empty()) fail(file, key, "empty matrix");
+        m.convertTo(m, CV_64F);
+        if (auto found = entries_.find(key); found != entries_.end()) {
+          if (!same(found->second.value, m))
+            fail(file, key, "given again with a different value (first in " + found->second.file + ")");
+          continue;
+        }
+        entries_[key] = Entry{m, file};
+      }
+    } catch (const cv::Exception& e) {
+      throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.err);
+    } catch (const CalibrationError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.what());
+    }
+  }
+
+  const Entry* find(const std::string& key) const {
+    auto it = entries_.find(key);
+    return it == entries_.end() ? nullptr : &it->second;
+  }
+
+  const Entry& require(const std::string& key, const std::string& files) const {
+    const Entry* e = find(key);
+    if (!e) fail(files, key, "missing");
+    return *e;
+  }
+
+ private:
+  std::map<std::string, Entry> entries_;
+};
+
+void require_finite(const Entry& e, const std::string& key) {
+  if (!cv::checkRange(e.value)) fail(e.file, key, "contains a non-finite value");
+}
+
+template <int Rows, int Cols>
+Eigen::Matrix<double, Rows, Cols> to_eigen(const Entry& e, const std::string& key) {
+  require_finite(e, key);
+  cv::Mat m = e.value;
+  // Vectors may be written as rows or as columns.
+  if ((Rows == 1 || Cols == 1) && m.total() == static_cast<std::size_t>(Rows * Cols) &&
+      (m.rows == 1 || m.cols == 1)) {
+    m = m.reshape(1, Rows);
+  }
+  if (m.rows != Rows || m.cols != Cols) {
+    std::ostringstream want;
+    want << Rows << "x" << Cols;
+    fail(e.file, key, "has shape " + shape_of(e.value) + ", expected " + want.str());
+  }
+  Eigen::Matrix<double, Rows, Cols> out;
+  cv::cv2eigen(m, out);
+  return out;
+}
+
+Distortion to_distortion(const Entry& e, const std::string& key) {
+  require_finite(e, key);
+  const cv::Mat& m = e.value;
+  if (!(m.rows == 1 || m.cols == 1)) fail(e.file, key, "has shape " + shape_of(m) + ", expected 1x5");
+  const std::size_t n = m.total();
+  if (n == 8 || n == 12 || n == 14)
+    fail(e.file, key,
+         std::to_string(n) + " coefficients: only the 4- or 5-coefficient plumb_bob model is supported");
+  if (n != 4 && n != 5)
+    fail(e.file, key, "has " + std::to_string(n) + " coefficients, expected 5 (k1 k2 p1 p2 k3)");
+  const double* v = m.ptr<double>();
+  return Distortion{v[0], v[1], v[2], v[3], n == 5 ? v[4] : 0.0};
+}
+
+CameraModel to_camera(const Keys& keys, const std::string& mkey, const std::string& dkey,
+                      const std::string& files, int width, int height) {
+  const Entry& me = keys.require(mkey, files);
+  const Eigen::Matrix3d K = to_eigen<3, 3>(me, mkey);
+  if (!(K(0, 0) > 0.0) || !(K(1, 1) > 0.0)) fail(me.file, mkey, "focal lengths must be positive");
+  if (K(1, 0) != 0.0 || K(2, 0) != 0.0 || K(2, 1) != 0.0 || K(2, 2) != 1.0)
+    fail(me.file, mkey, "not a camera matrix: the last row must be [0 0 1] and K(1,0) must be 0");
+  const Distortion d = to_distortion(keys.require(dkey, files), dkey);
+  return CameraModel(K, d, width, height);
+}
+
+int to_size(const Keys& keys, const std::string& key, const std::string& files) {
+  const Entry& e = keys.require(key, files);
+  require_finite(e, key);
+  if (e.value.total() != 1) fail(e.file, key, "must be a single integer");
+  const double v = e.value.at<double>(0);
+  if (v != std::floor(v) || v < 1 || v > 100000) fail(e.file, key, "must be a positive integer");
+  return static_cast<int>(v);
+}
+
+template <int Rows, int Cols>
+std::optional<Eigen::Matrix<double, Rows, Cols>> optional_sigma(const Keys& keys, const std::string& key) {
+  const Entry* e = keys.find(key);
+  if (!e) return std::nullopt;
+  auto m = to_eigen<Rows, Cols>(*e, key);
+  if ((m.array() < 0.0).any()) fail(e->file, key, "a standard deviation cannot be negative");
+  return m;
+}
+
+}  // namespace
+
+StereoRig load_rig(const std::vector<std::filesystem::path>& files) {
+  if (files.empty()) throw CalibrationError("no calibration file given");
+  Keys keys;
+  std::string names;
+  for (const auto& f : files) {
+    keys.read(f);
+    names += (names.empty() ? "" : " + ") + f.string();
+  }
+  const int width = to_size(keys, "image_width", names);
+  const int height = to_size(keys, "image_height", names);
+
+  StereoRig rig;
+  rig.left = to_camera(keys, "M1", "D1", names, width, height);
+  rig.right = to_camera(keys, "M2", "D2", names, width, height);
+
+  const Entry& re = keys.require("R", names);
+  rig.R = to_eigen<3, 3>(re, "R");
+  const double ortho = (rig.R.transpose() * rig.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (ortho > 1e-6 || rig.R.determinant() < 0.0) {
+    std::ostringstream s;
+    s << "not a rotation (|R^T R - I| = " << ortho << ", det = " << rig.R.determinant() << ")";
+    fail(re.file, "R", s.str());
+  }
+  rig.T = to_eigen<3, 1>(keys.require("T", names), "T");
+  if (rig.T.norm() == 0.0) fail(keys.require("T", names).file, "T", "zero baseline");
+
+  rig.sigmas.M1 = optional_sigma<3, 3>(keys, "M1_sigma");
+  rig.sigmas.M2 = optional_sigma<3, 3>(keys, "M2_sigma");
+  rig.sigmas.D1 = optional_sigma<5, 1>(keys, "D1_sigma");
+  rig.sigmas.D2 = optional_sigma<5, 1>(keys, "D2_sigma");
+  rig.sigmas.om = optional_sigma<3, 1>(keys, "om_sigma");
+  rig.sigmas.T = optional_sigma<3, 1>(keys, "T_sigma");
+  return rig;
+}
+
+void save_rig(const StereoRig& rig, const std::filesystem::path& file) {
+  cv::FileStorage fs(file.string(), cv::FileStorage::WRITE);
+  if (!fs.isOpened()) throw CalibrationError(file.string() + ": cannot be written");
+  auto put = [&](const char* key, const auto& m) {
+    cv::Mat cvm;
+    cv::eigen2cv(Eigen::MatrixXd(m), cvm);
+    fs << key << cvm;
+  };
+  auto dist = [](const Distortion& d) {
+    Eigen::Matrix<double, 1, 5> v;
+    v << d.k1, d.k2, d.p1, d.p2, d.k3;
+    return v;
+  };
+  fs << "image_width" << rig.left.width() << "image_height" << rig.left.height();
+  put("M1", rig.left.K());
+  put("D1", dist(rig.left.distortion()));
+  put("M2", rig.right.K());
+  put("D2", dist(rig.right.distortion()));
+  put("R", rig.R);
+  put("T", rig.T);
+  const auto& s = rig.sigmas;
+  if (s.M1) put("M1_sigma", *s.M1);
+  if (s.D1) put("D1_sigma", Eigen::Matrix<double, 1, 5>(s.D1->transpose()));
+  if (s.M2) put("M2_sigma", *s.M2);
+  if (s.D2) put("D2_sigma", Eigen::Matrix<double, 1, 5>(s.D2->transpose()));
+  if (s.om) put("om_sigma", *s.om);
+  if (s.T) put("T_sigma", *s.T);
+}
+
+}  // namespace naneye::recon

@@ -1,0 +1,237 @@
+// CornerDetector: the frame-level flow (luminance, tracking or full search, validation) and the
+// ordering of a found grid; the per-corner refinement is in corners/refine_grid.cpp.
+#include <algorithm>
+#include <cmath>
+
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/corners/grid.hpp"
+#include "plane.hpp"
+#include "naneye/recon/corners/refine.hpp"
+
+namespace naneye::recon {
+
+namespace {
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Sum of the grid's outer edges along columns and along rows.
+void grid_axes(const CornerResult& r, Eigen::Vector2d& col_dir, Eigen::Vector2d& row_dir) {
+  const int R = r.rows - 1, C = r.cols - 1;
+  col_dir = (r.at(0, C).px - r.at(0, 0).px) + (r.at(R, C).px - r.at(R, 0).px);
+  row_dir = (r.at(R, 0).px - r.at(0, 0).px) + (r.at(R, C).px - r.at(0, C).px);
+}
+
+void renumber(CornerResult& r) {
+  for (int i = 0; i < r.count; ++i) {
+    r.corners[static_cast<std::size_t>(i)].row = i / r.cols;
+    r.corners[static_cast<std::size_t>(i)].col = i % r.cols;
+  }
+}
+}  // namespace
+
+const char* to_string(CornerFailure f) {
+  switch (f) {
+    case CornerFailure::none:
+      return "none";
+    case CornerFailure::bad_input:
+      return "bad_input";
+    case CornerFailure::no_grid:
+      return "no_grid";
+    case CornerFailure::fit_failed:
+      return "fit_failed";
+    case CornerFailure::fit_rejected:
+      return "fit_rejected";
+    case CornerFailure::low_contrast:
+      return "low_contrast";
+    case CornerFailure::polarity:
+      return "polarity";
+    case CornerFailure::not_planar:
+      return "not_planar";
+    case CornerFailure::track_moved:
+      return "track_moved";
+  }
+  return "unknown";
+}
+
+void canonical_order(CornerResult& r) {
+  if (r.count != r.rows * r.cols || r.rows < 2 || r.cols < 2) return;
+  Eigen::Vector2d col_dir, row_dir;
+  grid_axes(r, col_dir, row_dir);
+  // Seen from the front, a board frame (u along columns, v along rows, z into the board) is
+  // right-handed only when u x v > 0 in the image (y down); OpenCV may return the mirrored order.
+  if (cross2(col_dir, row_dir) < 0) {
+    for (int row = 0; row < r.rows / 2; ++row) {
+      for (int col = 0; col < r.cols; ++col) {
+        std::swap(r.corners[static_cast<std::size_t>(row * r.cols + col)],
+                  r.corners[static_cast<std::size_t>((r.rows - 1 - row) * r.cols + col)]);
+      }
+    }
+    grid_axes(r, col_dir, row_dir);
+  }
+  const bool horizontal = std::abs(col_dir.x()) >= std::abs(col_dir.y());
+  const double along = horizontal ? col_dir.x() : col_dir.y();
+  if (along < 0) std::reverse(r.corners.begin(), r.corners.begin() + r.count);
+  renumber(r);
+}
+
+CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& settings)
+    : camera_(camera),
+      settings_(settings),
+      width_(camera.width()),
+      height_(camera.height()),
+      coarse_finder_(camera, settings.coarse) {
+  luma_.resize(static_cast<std::size_t>(width_) * height_);
+  scratch_.resize(luma_.size());
+  coarse_.resize(kMaxCorners);
+  gray8_.resize(luma_.size());
+  map_ = std::make_shared<const UndistortMap>(camera_);
+  work_.resize(1);
+  work_.front().use_avx2 = work_.front().use_avx2 && settings_.allow_avx2;
+  z_reject_ = upper_normal_quantile(settings_.residual_false_reject);
+}
+
+bool CornerDetector::detect(const RawImageView& image, const CornerResult* previous, CornerResult& out) {
+  out.found = false;
+  out.tracked = false;
+  out.count = 0;
+  out.rows = settings_.rows;
+  out.cols = settings_.cols;
+  failure_ = CornerFailure::none;
+  if (image.width != width_ || image.height != height_ || !image.data ||
+      settings_.rows * settings_.cols > kMaxCorners) {
+    failure_ = CornerFailure::bad_input;
+    return false;
+  }
+  row_begin_ = image.ignore_edge_rows;
+  row_end_ = height_ - image.ignore_edge_rows;
+  col_end_ = width_ - image.ignore_last_cols;
+  if (previous && previous->found && previous->rows == settings_.rows && previous->cols == settings_.cols) {
+    // Tracking reads only the board's rows: the luminance of those (and their margin) only. A fit
+    // window that reaches the band's edge fails the tracking, which then searches the whole image.
+    const auto [lo, hi] = tracking_rows(*previous);
+    luminance_and_noise(image, lo, hi);
+    const int usable_begin = row_begin_, usable_end = row_end_;
+    row_begin_ = std::max(row_begin_, lo);
+    row_end_ = std::min(row_end_, hi);
+    const bool band = row_begin_ > usable_begin || row_end_ < usable_end;
+    if (track(*previous, out, band)) return true;
+    out.found = false;
+    out.count = 0;
+    row_begin_ = usable_begin;
+    row_end_ = usable_end;
+    if (!band) return full_search(out);
+  }
+  luminance_and_noise(image, 0, -1);
+  return full_search(out);
+}
+
+void CornerDetector::luminance_and_noise(const RawImageView& image, int row_lo, int row_hi) {
+  bayer_ = image.layout == PixelLayout::bayer_grbg;
+  const int hi = row_hi < 0 ? height_ : row_hi;
+  // The white balance is the sensor's and the light's, not the frame's: tracking keeps the one its
+  // previous full search measured (two regressions over the mosaic cost more than the tracked fits).
+  const bool keep = bayer_ && (row_lo > 0 || row_hi >= 0) && balance_.valid;
+  if (!keep) balance_ = bayer_ ? estimate_cfa_balance(image, row_lo, hi) : CfaBalance{};
+  raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn, row_lo, row_hi, &balance_);
+  // The noise of the (balanced) mosaic, then of the luminance: the 3 x 3 binomial's weights
+  // squared sum to 36 / 256 (correlating neighbours, which residual_bound accounts for).
+  const float* mosaic = bayer_ ? scratch_.data() : luma_.data();
+  const int r0 = std::max(row_lo, image.ignore_edge_rows),
+            r1 = std::min(hi, height_ - image.ignore_edge_rows);
+  const NoiseModel m =
+      noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols, bayer_ ? 2 : 1);
+  const double f = bayer_ ? 36.0 / 256.0 : 1.0;
+  noise_ = NoiseModel{m.a * f, m.b * f, m.levels};
+}
+
+std::pair<int, int> CornerDetector::tracking_rows(const CornerResult& previous) const {
+  double lo = height_, hi = 0, spacing = 0;
+  for (int r = 0; r < previous.rows; ++r) {
+    for (int c = 0; c < previous.cols; ++c) {
+      const Eigen::Vector2d& p = previous.at(r, c).px;
+      lo = std::min(lo, p.y());
+      hi = std::max(hi, p.y());
+      if (c + 1 < previous.cols) spacing = std::max(spacing, (previous.at(r, c + 1).px - p).norm());
+      if (r + 1 < previous.rows) spacing = std::max(spacing, (previous.at(r + 1, c).px - p).norm());
+    }
+  }
+  // What a corner's work reaches: its fit window (taper included), the polarity samples (up to 0.35
+  // of the spacing), the allowed motion, and two rows of rounding.
+  const double reach =
+      std::max<double>(FastFitScratch::kMaxHalf, 0.35 * spacing + 2.0) + settings_.max_track_motion_px + 2.0;
+  return {static_cast<int>(std::floor(lo - reach)), static_cast<int>(std::ceil(hi + reach)) + 1};
+}
+
+bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool band) {
+  out.count = previous.count;
+  out.corners = previous.corners;
+  if (!refine_all(out, true)) return false;
+  for (int i = 0; i < out.count && band; ++i) {
+    if (out.corners[static_cast<std::size_t>(i)].flags & kCornerNearEdge) {
+      failure_ = CornerFailure::track_moved;  // its window met the edge of the rows computed
+      return false;
+    }
+  }
+  for (int i = 0; i < out.count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    // A corner that moved by a sizeable part of the spacing may have locked onto its neighbour,
+    // which would shift every id: refuse and search afresh.
+    if ((out.corners[k].px - previous.corners[k].px).norm() > settings_.max_track_motion_px) {
+      failure_ = CornerFailure::track_moved;
+      return false;
+    }
+  }
+  if (!validate(out)) return false;
+  out.found = true;
+  out.tracked = true;
+  return true;
+}
+
+bool CornerDetector::full_search(CornerResult& out) {
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  bool found = coarse_finder_.find(v, settings_.rows, settings_.cols, coarse_.data(), &noise_);
+  if (!found && settings_.opencv_fallback) {
+    found = coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_);
+  }
+  if (!found) {
+    failure_ = CornerFailure::no_grid;
+    return false;
+  }
+  out.count = settings_.rows * settings_.cols;
+  for (int i = 0; i < out.count; ++i) {
+    Corner& c = out.corners[static_cast<std::size_t>(i)];
+    c = Corner{};
+    c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
+  }
+  canonical_order(out);
+  if (!refine_all(out, false) || !validate(out)) {
+    out.count = 0;
+    return false;
+  }
+  out.found = true;
+  return true;
+}
+
+bool CornerDetector::validate(const CornerResult& out) {
+  // Every corner a saddle of the right polarity: a checkerboard alternates along rows and columns.
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  const int p0 = corner_polarity(v, out, 0, 0);
+  failure_ = CornerFailure::polarity;
+  if (p0 == 0) return false;
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const int expect = ((r + c) % 2 == 0) ? p0 : -p0;
+      if (corner_polarity(v, out, r, c) != expect) return false;
+    }
+  }
+  // The grid must be the image of a plane: a homography in undistorted coordinates.
+  double rms = 0, worst = 0;
+  failure_ = CornerFailure::not_planar;
+  if (!grid_plane_residual(out, camera_, rms, worst)) return false;
+  if (rms > settings_.max_homography_rms_px || worst > settings_.max_homography_worst_px) return false;
+  failure_ = CornerFailure::none;
+  return true;
+}
+
+}  // namespace naneye::recon

@@ -1,0 +1,90 @@
+#include "naneye/recon/corners/grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+namespace naneye::recon {
+
+bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<unsigned char>& gray8,
+                        std::vector<Eigen::Vector2f>& coarse) {
+  // Stretch the usable area's 1st..99th percentile to 0..255 (10-bit DN would be clipped or too
+  // dark for OpenCV's 8-bit detectors; the dark background and hot pixels must not set the scale).
+  std::array<int, 1024> hist{};
+  int n = 0;
+  for (int r = img.row_begin; r < img.row_end; ++r) {
+    for (int c = 0; c < img.col_end; ++c) {
+      ++hist[static_cast<std::size_t>(std::clamp(static_cast<int>(img.at(r, c)), 0, 1023))];
+      ++n;
+    }
+  }
+  int lo = 0, hi = 1023, acc = 0;
+  for (int v = 0; v < 1024; ++v) {
+    acc += hist[static_cast<std::size_t>(v)];
+    if (acc <= n / 100) lo = v;
+    if (acc < n - n / 100) hi = v + 1;
+  }
+  if (hi <= lo) return false;
+  gray8.resize(static_cast<std::size_t>(img.width) * img.height);
+  const float scale = 255.0f / static_cast<float>(hi - lo);
+  for (int i = 0; i < img.width * img.height; ++i) {
+    gray8[static_cast<std::size_t>(i)] =
+        static_cast<unsigned char>(std::clamp((img.data[i] - static_cast<float>(lo)) * scale, 0.0f, 255.0f));
+  }
+  const cv::Mat gray(img.height, img.width, CV_8UC1, gray8.data());
+  std::vector<cv::Point2f> pts;
+  bool ok = cv::findChessboardCorners(gray, cv::Size(cols, rows), pts,
+                                      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+  if (!ok) ok = cv::findChessboardCornersSB(gray, cv::Size(cols, rows), pts, cv::CALIB_CB_NORMALIZE_IMAGE);
+  if (!ok || static_cast<int>(pts.size()) != rows * cols) return false;
+  coarse.resize(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) coarse[i] = {pts[i].x, pts[i].y};
+  return true;
+}
+
+namespace {
+float bilinear(const LumaView& img, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  if (x0 < 0 || y0 < img.row_begin || x0 + 1 >= img.col_end || y0 + 1 >= img.row_end) return -1.0f;
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const float a = img.at(y0, x0), b = img.at(y0, x0 + 1), c = img.at(y0 + 1, x0), d = img.at(y0 + 1, x0 + 1);
+  return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy;
+}
+}  // namespace
+
+int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col) {
+  // Grid directions from the neighbours (one-sided at the grid's border).
+  const Eigen::Vector2d p = r.at(row, col).px;
+  const int c0 = std::max(col - 1, 0), c1 = std::min(col + 1, r.cols - 1);
+  const int r0 = std::max(row - 1, 0), r1 = std::min(row + 1, r.rows - 1);
+  const Eigen::Vector2d dc = (r.at(row, c1).px - r.at(row, c0).px) / (c1 - c0);
+  const Eigen::Vector2d dr = (r.at(r1, col).px - r.at(r0, col).px) / (r1 - r0);
+  // Quadrant centres at 0.35 of the spacing along each diagonal; for a corner near the image border
+  // (every corner in view, but the outer squares cut by the edge) closer, down to 0.18, as long as the
+  // samples stay >= 2.5 px from the corner (outside its blur, a few tenths of a pixel here).
+  float va = -1, vb = -1, vc = -1, vd = -1;
+  for (const double f : {0.35, 0.25, 0.18}) {
+    const Eigen::Vector2d s1 = f * (dc + dr), s2 = f * (dc - dr);
+    if (std::min(s1.norm(), s2.norm()) < 2.5) break;
+    const Eigen::Vector2d a = p + s1, b = p - s1, c = p + s2, d = p - s2;
+    va = bilinear(img, a.x(), a.y());
+    vb = bilinear(img, b.x(), b.y());
+    vc = bilinear(img, c.x(), c.y());
+    vd = bilinear(img, d.x(), d.y());
+    if (va >= 0 && vb >= 0 && vc >= 0 && vd >= 0) break;
+  }
+  if (va < 0 || vb < 0 || vc < 0 || vd < 0) return 0;
+  const float diag1 = std::min(va, vb), diag2 = std::min(vc, vd);
+  const float diag1_max = std::max(va, vb), diag2_max = std::max(vc, vd);
+  // Both quadrants of one diagonal must be brighter than both of the other, by at least half the
+  // difference of the diagonals' means: an X-junction's quadrants pair up (ratio ~1, less the
+  // shading), while an L- or T-junction at the board's border has two quadrants on the margin at
+  // one level (ratio ~0 whatever that grey is), which a fit with linear shading can pass.
+  const float mean_gap = 0.5f * std::abs((va + vb) - (vc + vd));
+  if (diag1 > diag2_max && diag1 - diag2_max >= 0.5f * mean_gap) return 1;
+  if (diag2 > diag1_max && diag2 - diag1_max >= 0.5f * mean_gap) return -1;
+  return 0;
+}
+
+}  // namespace naneye::recon

@@ -1,0 +1,273 @@
+// The sub-pixel refinement of a whole grid (CornerDetector::refine_all): pass 1 from the coarse or
+// previous grid, pass 2 with the edges of the pass-1 grid, then the acceptance of every fit
+// (docs/corners.md).
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/corners/refine.hpp"
+
+namespace naneye::recon {
+
+namespace {
+struct Grid {
+  const std::array<Eigen::Vector2d, kMaxCorners>& p;
+  int rows, cols;
+  const Eigen::Vector2d& at(int r, int c) const { return p[static_cast<std::size_t>(r * cols + c)]; }
+  // Grid steps along the row (to the next column) and along the column, one-sided at the border.
+  void steps(int r, int c, Eigen::Vector2d& dc, Eigen::Vector2d& dr) const {
+    const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, cols - 1);
+    const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, rows - 1);
+    dc = (at(r, c1) - at(r, c0)) / (c1 - c0);
+    dr = (at(r1, c) - at(r0, c)) / (r1 - r0);
+  }
+};
+}  // namespace
+
+namespace {
+// Sum over lags of the squared correlation of noise filtered by the 3 x 3 binomial ([1 2 1] / 4 per
+// axis: correlations 1, 2/3, 1/6 at lags 0, 1, 2, so 1 + 2 (4/9 + 1/36) = 1.944 per axis): a window
+// of n filtered pixels has the residual-variance spread of n / 3.78 independent ones.
+constexpr double kBayerNoiseCorrelation = 1.9444444444444444 * 1.9444444444444444;
+}  // namespace
+
+double CornerDetector::residual_bound(const SaddleFit& fit, double radius, double misfit) const {
+  const double var_n = noise_.variance(fit.shading.valid ? fit.shading.a : 0.0);
+  const double side = 2.0 * radius + 1.0;
+  double nu = (fit.weight > 0 ? fit.weight : side * side) - 9.0;
+  if (bayer_) nu /= kBayerNoiseCorrelation;
+  nu = std::max(nu, 4.0);
+  // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
+  const double t = 1.0 - 2.0 / (9.0 * nu) + z_reject_ * std::sqrt(2.0 / (9.0 * nu));
+  const double m = misfit * fit.contrast;
+  return var_n * t * t * t + m * m;
+}
+
+bool CornerDetector::fit_acceptable(const SaddleFit& fit, double radius) const {
+  return fit.rms * fit.rms <= residual_bound(fit, radius, settings_.model_misfit) &&
+         2.0 * fit.contrast >= settings_.min_contrast_snr * std::sqrt(noise_.variance(fit.shading.a)) &&
+         fit.sigma >= settings_.min_sigma_px && fit.sigma <= settings_.max_sigma_per_radius * radius;
+}
+
+double CornerDetector::fit_radius(double spacing) const {
+  // The window must not reach the neighbouring corners' edges (blur included).
+  return std::clamp(settings_.window_fraction * spacing, settings_.min_radius, settings_.max_radius);
+}
+
+bool CornerDetector::fit_corner(const SaddleInit& init, const EdgeDirections* edges, double radius,
+                                double tolerance_px, SaddleFit& fit, std::uint8_t& flags) {
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  FastFitScratch& w = work_.front();
+  auto run = [&](const SaddleInit& s, double rad, SaddleFit& f) {
+    return fit_saddle_fast(v, camera_, *map_, s, edges, rad, 50, tolerance_px, w, f);
+  };
+  bool ok = run(init, radius, fit);
+  while (!ok && radius > settings_.min_radius) {
+    const int half = static_cast<int>(std::ceil(radius)) + 1;
+    const int cx = static_cast<int>(std::lround(init.px.x())),
+              cy = static_cast<int>(std::lround(init.px.y()));
+    const bool at_edge =
+        cx - half < 0 || cx + half >= col_end_ || cy - half < row_begin_ || cy + half >= row_end_;
+    if (!at_edge) break;
+    radius = std::max(radius - 1.0, settings_.min_radius);
+    flags |= kCornerNearEdge;
+    ok = run(init, radius, fit);
+  }
+  // A start far from the optimum can let the blur collapse (the erf turns into a step and its
+  // gradient vanishes): retry once from a wide blur before giving up on the corner.
+  const bool poor = ok && (!fit_acceptable(fit, radius) || fit.sigma < 0.1);
+  if (!ok || poor) {
+    SaddleInit wide = init;
+    wide.sigma = 1.2;
+    wide.shading.valid = false;  // solve the linear terms afresh too
+    SaddleFit retry;
+    if (run(wide, radius, retry) && (!ok || retry.rms < fit.rms)) {
+      fit = retry;
+      ok = true;
+    }
+  }
+  return ok;
+}
+
+void CornerDetector::grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols) {
+  // The board's edges through a corner are the grid lines through its neighbours, straight on the
+  // undistorted plane: their directions come from the grid itself, more precisely than a 7 px
+  // window can fit them (a 0.02 px corner error over two spacings is ~1e-3 rad).
+  std::array<Eigen::Vector2d, kMaxCorners> xn;
+  std::array<bool, kMaxCorners> ok{};
+  for (int i = 0; i < rows * cols; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const Undistorted u = camera_.undistort(px[k]);
+    ok[k] = u.ok();
+    xn[k] = u.normalized;
+  }
+  auto at = [&](int r, int c) { return static_cast<std::size_t>(r * cols + c); };
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, cols - 1);
+      const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, rows - 1);
+      EdgeDirections& e = edges_[at(r, c)];
+      e.row_px = px[at(r, c1)] - px[at(r, c0)];
+      e.col_px = px[at(r1, c)] - px[at(r0, c)];
+      e.normalized_ok = ok[at(r, c0)] && ok[at(r, c1)] && ok[at(r0, c)] && ok[at(r1, c)];
+      e.row_n = xn[at(r, c1)] - xn[at(r, c0)];
+      e.col_n = xn[at(r1, c)] - xn[at(r0, c)];
+    }
+  }
+}
+
+namespace {
+// Tracking: the motion of the corners fitted in pass 1 (`fitted`) as one affine map of the previous
+// positions, applied to the others (their blur from the nearest fitted corner is not needed: pass 2
+// starts from the previous blur). False when the motion is not affine within 0.3 px: the board
+// moved too much or a fit locked onto the wrong corner; a full search follows.
+bool affine_motion(const std::array<Eigen::Vector2d, kMaxCorners>& prev,
+                   const std::array<bool, kMaxCorners>& fitted, std::size_t n,
+                   std::array<Eigen::Vector2d, kMaxCorners>& now) {
+  Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+  Eigen::Matrix<double, 3, 2> Atb = Eigen::Matrix<double, 3, 2>::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!fitted[i]) continue;
+    const Eigen::Vector3d a(prev[i].x(), prev[i].y(), 1.0);
+    AtA += a * a.transpose();
+    Atb += a * now[i].transpose();
+  }
+  const Eigen::Matrix<double, 3, 2> M = AtA.ldlt().solve(Atb);
+  if (!M.allFinite()) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d p = M.transpose() * Eigen::Vector3d(prev[i].x(), prev[i].y(), 1.0);
+    if (fitted[i] && (p - now[i]).norm() > 0.3) return false;
+    if (!fitted[i]) now[i] = p;
+  }
+  return true;
+}
+}  // namespace
+
+bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
+  constexpr double kHalfPi = 1.57079632679489661923;
+  const std::size_t n = static_cast<std::size_t>(out.count);
+  std::array<Eigen::Vector2d, kMaxCorners> start, first;
+  std::array<SaddleFit, kMaxCorners> fits;
+  std::array<std::uint8_t, kMaxCorners> flags{};
+  std::array<double, kMaxCorners> radii{};
+  for (std::size_t i = 0; i < n; ++i) start[i] = out.corners[i].px;
+  // Pass 1: from the coarse (or previous) grid, with windows sized by its spacing. From a coarse
+  // grid all 11 parameters are fitted at every corner. From the previous frame's grid, only a few
+  // corners are fitted (edges from that grid, see grid_edges: corner, blur and shading only) and an
+  // affine motion through them moves the others: pass 2 only needs its windows centred within a few
+  // hundredths of a pixel of where the full search would centre them.
+  const Grid g0{start, out.rows, out.cols};
+  if (from_previous) grid_edges(start, out.rows, out.cols);
+  const int R = out.rows - 1, C = out.cols - 1;
+  auto sparse = [&](int r, int c) {
+    return (r == 0 || r == R || r == R / 2) && (c == 0 || c == C || c == C / 2);
+  };
+  std::array<bool, kMaxCorners> fitted{};
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const auto i = static_cast<std::size_t>(r * out.cols + c);
+      if (from_previous && !sparse(r, c)) continue;
+      const Corner& k = out.corners[i];
+      Eigen::Vector2d dc, dr;
+      g0.steps(r, c, dc, dr);
+      SaddleInit init;
+      init.px = start[i];
+      init.theta1 = std::atan2(dc.y(), dc.x()) + kHalfPi;  // normal of the edge along the row
+      init.theta2 = std::atan2(dr.y(), dr.x()) + kHalfPi;  // normal of the edge along the column
+      init.sigma = from_previous && k.sigma_px > 0 ? k.sigma_px : 0.8;
+      if (from_previous) {
+        init.shading = k.shading;
+        init.shading_at = k.px;
+      }
+      // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
+      const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
+      if (!fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i])) {
+        failure_ = CornerFailure::fit_failed;
+        return false;
+      }
+      first[i] = fits[i].px;
+      fitted[i] = true;
+    }
+  }
+  if (from_previous && !affine_motion(start, fitted, n, first)) {
+    failure_ = CornerFailure::track_moved;
+    return false;
+  }
+  // Pass 2: the window that the fitted grid calls for, centred on the fitted corner, so that the
+  // result does not depend on where the fit started (tracking and full search must agree), with the
+  // edges of the pass-1 grid; it starts at the pass-1 optimum and converges in a few iterations.
+  const Grid g1{first, out.rows, out.cols};
+  grid_edges(first, out.rows, out.cols);
+  for (int r = 0; r < out.rows; ++r) {
+    for (int c = 0; c < out.cols; ++c) {
+      const auto i = static_cast<std::size_t>(r * out.cols + c);
+      Eigen::Vector2d dc, dr;
+      g1.steps(r, c, dc, dr);
+      const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
+      const Corner& k = out.corners[i];
+      const double sigma = fitted[i] ? fits[i].sigma : (k.sigma_px > 0 ? k.sigma_px : 0.8);
+      SaddleInit again{first[i], fits[i].theta1, fits[i].theta2, sigma};
+      if (fitted[i]) {
+        again.shading = fits[i].shading;
+        again.shading_at = fits[i].px;
+      } else {
+        again.shading = k.shading;  // the previous frame's (tracking)
+        again.shading_at = k.px;
+      }
+      flags[i] = 0;
+      if (!fit_corner(again, &edges_[i], radius, 1e-3, fits[i], flags[i])) {
+        failure_ = CornerFailure::fit_failed;
+        return false;
+      }
+      // The grid's edge directions hold when the pass-1 corners are right to a few hundredths of a
+      // pixel; a close board (sharp edges over few pixels) can miss that and leave the fixed-edge
+      // fit poor: then free the edges (11 parameters) and keep the better fit.
+      radii[i] = radius;
+      if (!fit_acceptable(fits[i], radius)) {
+        SaddleFit free_fit;
+        std::uint8_t free_flags = 0;
+        if (fit_corner(again, nullptr, radius, 1e-3, free_fit, free_flags) && free_fit.rms < fits[i].rms) {
+          fits[i] = free_fit;
+          flags[i] = free_flags;
+        }
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const SaddleFit& fit = fits[i];
+    const double var_n = noise_.variance(fit.shading.a);
+    rejection_ = CornerRejection{static_cast<int>(i),
+                                 fit.rms,
+                                 std::sqrt(residual_bound(fit, radii[i], settings_.model_misfit)),
+                                 2.0 * fit.contrast,
+                                 std::sqrt(var_n),
+                                 fit.shading.a,
+                                 fit.sigma,
+                                 radii[i]};
+    if (2.0 * fit.contrast < settings_.min_contrast_snr * std::sqrt(var_n)) {
+      failure_ = CornerFailure::low_contrast;
+      return false;
+    }
+    if (!fit_acceptable(fit, radii[i])) {
+      failure_ = CornerFailure::fit_rejected;
+      return false;
+    }
+    if (fit.rms * fit.rms > residual_bound(fit, radii[i], settings_.poor_misfit)) flags[i] |= kCornerFitPoor;
+    if (!fit.undistorted || !camera_.in_domain(fit.px)) flags[i] |= kCornerBeyondFold;
+    Corner& k = out.corners[i];
+    k.px = fit.px;
+    k.row = static_cast<int>(i) / out.cols;
+    k.col = static_cast<int>(i) % out.cols;
+    k.flags = flags[i];
+    k.sigma_px = fit.sigma;
+    k.contrast = 2.0 * fit.contrast;
+    k.residual = fit.rms;
+    k.theta_row = fit.theta1;
+    k.theta_col = fit.theta2;
+    k.shading = fit.shading;
+  }
+  return true;
+}
+
+}  // namespace naneye::recon

@@ -1,0 +1,22 @@
+#pragma once
+// The coarse grid and the whole-grid checks of the corner detector (corners.hpp).
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/corners/refine.hpp"
+
+namespace naneye::recon {
+
+// Full search for a rows x cols grid of inner corners with OpenCV (findChessboardCorners with
+// adaptive threshold, then findChessboardCornersSB), on an 8-bit stretch of the luminance. Fills
+// `coarse` row-major (cols per row). `gray8` is a reusable buffer.
+bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<unsigned char>& gray8,
+                        std::vector<Eigen::Vector2f>& coarse);
+
+// +1 / -1: which diagonal pair of quadrants around corner (row, col) is the brighter one, sampled
+// from the image along the grid directions; 0 when unclear. A true checkerboard alternates.
+int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col);
+
+}  // namespace naneye::recon

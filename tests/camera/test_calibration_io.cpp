@@ -1,0 +1,166 @@
+// Calibration files: OpenCV stereo_calib keys, split or whole, sigmas, and refusals that name the
+// file, the key and the problem.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "naneye/recon/camera/calibration_io.hpp"
+
+namespace fs = std::filesystem;
+using naneye::recon::CalibrationError;
+using naneye::recon::load_rig;
+
+namespace {
+
+const fs::path kDefault = fs::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml";
+
+class CalibFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("naneye-calib-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    std::ifstream in(kDefault);
+    text_.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write(const std::string& name, const std::string& content) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << content;
+    return p;
+  }
+  // The default file with the first occurrence of `from` replaced by `to` (plain text, no regex:
+  // GCC 12's std::regex trips -Wmaybe-uninitialized under ASan).
+  fs::path variant(const std::string& from, const std::string& to) {
+    std::string out = text_;
+    const auto at = out.find(from);
+    EXPECT_NE(at, std::string::npos) << "not in the default file: " << from;
+    if (at != std::string::npos) out.replace(at, from.size(), to);
+    return write("variant.yaml", out);
+  }
+  // Expects load_rig to throw with a message containing every fragment.
+  void expect_refused(const fs::path& file, std::initializer_list<std::string> fragments) {
+    try {
+      load_rig(file);
+      ADD_FAILURE() << "accepted " << file;
+    } catch (const CalibrationError& e) {
+      const std::string msg = e.what();
+      for (const auto& f : fragments)
+        EXPECT_NE(msg.find(f), std::string::npos) << "'" << f << "' not in: " << msg;
+    }
+  }
+
+  fs::path dir_;
+  std::string text_;
+};
+
+}  // namespace
+
+TEST_F(CalibFiles, DefaultIsThePapersDataset3) {
+  const auto rig = load_rig(kDefault);
+  EXPECT_DOUBLE_EQ(rig.left.fx(), 216.360);
+  EXPECT_DOUBLE_EQ(rig.left.cy(), 111.535);
+  EXPECT_DOUBLE_EQ(rig.left.distortion().k3, -0.366);
+  EXPECT_DOUBLE_EQ(rig.right.distortion().k3, 0.866);
+  // The paper's relative pose: omega = (-0.0034, 0.0134, 0.0341), right origin C = (1.063, -0.203, 0.118).
+  const Eigen::Vector3d om = naneye::recon::rodrigues(rig.R);
+  EXPECT_NEAR((om - Eigen::Vector3d(-0.0034, 0.0134, 0.0341)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((rig.right_center() - Eigen::Vector3d(1.063, -0.203, 0.118)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(rig.rotation_angle_rad() * 180 / M_PI, 2.1, 0.02);  // "approximately 2.1 degrees"
+  ASSERT_TRUE(rig.sigmas.M1);
+  EXPECT_DOUBLE_EQ((*rig.sigmas.M1)(0, 0), 0.579);
+  ASSERT_TRUE(rig.sigmas.D2);
+  EXPECT_DOUBLE_EQ((*rig.sigmas.D2)(4), 0.499);
+  EXPECT_FALSE(rig.sigmas.om);
+}
+
+TEST_F(CalibFiles, SaveLoadRoundTripIsExact) {
+  const auto rig = load_rig(kDefault);
+  const fs::path out = dir_ / "saved.yaml";
+  naneye::recon::save_rig(rig, out);
+  const auto back = load_rig(out);
+  EXPECT_EQ(back.left.K(), rig.left.K());
+  EXPECT_EQ(back.right.K(), rig.right.K());
+  EXPECT_EQ(back.R, rig.R);
+  EXPECT_EQ(back.T, rig.T);
+  EXPECT_EQ(back.left.distortion().k2, rig.left.distortion().k2);
+  EXPECT_EQ(*back.sigmas.T, *rig.sigmas.T);
+  EXPECT_EQ(*back.sigmas.D1, *rig.sigmas.D1);
+}
+
+TEST_F(CalibFiles, IntrinsicsAndExtrinsicsInTwoFiles) {
+  const auto pos = text_.find("R: !!opencv-matrix");
+  const auto sig = text_.find("# One-sigma");
+  ASSERT_NE(pos, std::string::npos);
+  const std::string header = "%YAML:1.0\n---\n";
+  const auto intr = write("intrinsics.yml", text_.substr(0, pos));
+  const auto extr = write("extrinsics.yml", header + text_.substr(pos, sig - pos));
+  const auto rig = load_rig({intr, extr});
+  EXPECT_EQ(rig.R, load_rig(kDefault).R);
+  // Either half alone is refused, naming what is missing.
+  expect_refused(intr, {"intrinsics.yml", "'R'", "missing"});
+}
+
+TEST_F(CalibFiles, ConflictingDuplicateKeyRefused) {
+  const auto a = write("a.yml", text_);
+  const std::string header = "%YAML:1.0\n---\n";
+  const auto b = write(
+      "b.yml", header + "T: !!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [ -1., 0., 0. ]\n");
+  try {
+    load_rig({a, b});
+    ADD_FAILURE();
+  } catch (const CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("b.yml"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("'T'"), std::string::npos);
+  }
+}
+
+TEST_F(CalibFiles, MissingKeyRefused) {
+  expect_refused(variant("M2: !!opencv-matrix", "M9: !!opencv-matrix"), {"variant.yaml", "'M2'", "missing"});
+  expect_refused(variant("image_width: 250\n", ""), {"variant.yaml", "'image_width'", "missing"});
+}
+
+TEST_F(CalibFiles, WrongShapeRefused) {
+  expect_refused(
+      variant("rows: 3\n   cols: 3\n   dt: d\n   data: [ 216.360, 0., 122.414, 0., 216.315, 111.535, 0., "
+              "0., 1. ]",
+              "rows: 2\n   cols: 3\n   dt: d\n   data: [ 216.360, 0., 122.414, 0., 216.315, 111.535 ]"),
+      {"variant.yaml", "'M1'", "2x3", "expected 3x3"});
+  expect_refused(variant("cols: 5\n   dt: d\n   data: [ -0.369, 0.303, 0., 0., -0.366 ]",
+                         "cols: 8\n   dt: d\n   data: [ -0.369, 0.303, 0., 0., -0.366, 0., 0., 0. ]"),
+                 {"'D1'", "8 coefficients"});
+  expect_refused(variant("data: [ -0.369, 0.303, 0., 0., -0.366 ]", "data: [ -0.369, 0.303, 0., 0. ]"),
+                 {"'D1'", "data"});
+}
+
+TEST_F(CalibFiles, NonFiniteRefused) {
+  expect_refused(variant("-1.0707859762429959", ".nan"), {"variant.yaml", "'T'", "non-finite"});
+}
+
+TEST_F(CalibFiles, NotARotationRefused) {
+  expect_refused(variant("0.99932889072470799", "0.9"), {"variant.yaml", "'R'", "not a rotation"});
+}
+
+TEST_F(CalibFiles, BadCameraMatrixRefused) {
+  expect_refused(variant("216.360, 0., 122.414", "-216.360, 0., 122.414"), {"'M1'", "positive"});
+}
+
+TEST_F(CalibFiles, ImageSizeMustBeStated) {
+  expect_refused(variant("image_height: 250\n", ""), {"'image_height'", "missing"});
+  expect_refused(variant("image_width: 250", "image_width: 250.5"), {"'image_width'", "integer"});
+  // A different sensor (160 x 160) is accepted when the file says so.
+  const auto rig =
+      load_rig(variant("image_width: 250\nimage_height: 250", "image_width: 160\nimage_height: 160"));
+  EXPECT_EQ(rig.left.width(), 160);
+}
+
+TEST_F(CalibFiles, UnreadableFilesRefused) {
+  expect_refused(dir_ / "absent.yaml", {"absent.yaml", "not found"});
+  const auto garbage = write("garbage.yaml", "this: [is: not, {valid\n");
+  EXPECT_THROW(load_rig(garbage), CalibrationError);
+  expect_refused(variant("0.579, 0., 0.758", "-0.579, 0., 0.758"), {"'M1_sigma'", "negative"});
+}
