@@ -20,8 +20,6 @@
 #include <httplib.h>
 // clang-format on
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -37,6 +35,7 @@
 #include <thread>
 #include <vector>
 
+#include "../tests/daemon/daemon_process.hpp"
 #include "../tests/daemon/temp_dir.hpp"
 #include "http_load.hpp"
 #include "naneye/daemon/pipeline.hpp"
@@ -45,8 +44,6 @@
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "smooth_capture.hpp"
-
-extern char** environ;
 
 // Every heap allocation of the process is counted, in total and per thread: each thread takes a
 // slot of a fixed table on its first allocation (no allocation of its own, no lock).
@@ -208,16 +205,6 @@ void serialization_cost() {
       us, bytes / reps);
 }
 
-struct Child {
-  pid_t pid = -1;
-  ~Child() {
-    if (pid > 0) {
-      kill(pid, SIGTERM);
-      waitpid(pid, nullptr, 0);
-    }
-  }
-};
-
 long rss_kb(pid_t pid, const char* key) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/status");
   for (std::string line; std::getline(in, line);) {
@@ -277,42 +264,23 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   std::printf("-- naneyed, %s\n", what     ? what
                                   : detect ? "board reconstruction (the real processing step)"
                                            : "timing only (board.detect = false)");
-  std::vector<std::string> args{
-      NANEYED_PATH,  "--config", config.string(),
-      "--calib",     kCalib,     "--listen",
-      "127.0.0.1:0", "--source", "file://" + capture.string() + "?speed=realtime&loop=1"};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  Child child;
-  posix_spawn(&child.pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  int port = 0;
-  const std::string marker = "listening on http://";
-  for (int i = 0; i < 1000 && port == 0; ++i) {
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    const std::string s = text.str();
-    const auto at = s.find(marker);
-    const auto colon = at == std::string::npos ? at : s.find(':', at + marker.size());
-    if (colon != std::string::npos) port = std::atoi(s.c_str() + colon + 1);
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  if (port == 0) {
+  daemon::test::DaemonProcess child(
+      {"--config", config.string(), "--calib", kCalib, "--listen", "127.0.0.1:0", "--source",
+       "file://" + capture.string() + "?speed=realtime&loop=1"},
+      log);
+  const std::optional<int> listening = child.wait_port();
+  if (!listening) {
     std::printf("naneyed did not start; see %s\n", log.c_str());
     return;
   }
+  const int port = *listening;
   httplib::Client c("127.0.0.1", port);
   auto status = [&] { return nlohmann::json::parse(c.Get("/v1/status")->body); };
 
   // Phase 1: streaming at 62 fps, no HTTP load.
-  const auto idle0 = cpu_now(child.pid);
+  const auto idle0 = cpu_now(child.pid());
   std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
-  const auto idle1 = cpu_now(child.pid);
+  const auto idle1 = cpu_now(child.pid());
   const double streaming_share = (idle1.naneyed_s - idle0.naneyed_s) / (idle1.wall_s - idle0.wall_s);
   auto s1 = status();
   std::printf(
@@ -322,7 +290,7 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
       s1["capture_to_publish_ms"]["p99"].get<double>(), s1["capture_to_publish_ms"]["max"].get<double>(),
       s1["capture_to_publish_ms"]["samples"].get<int>(), s1["recon_ms"]["p50"].get<double>(),
       s1["recon_ms"]["p99"].get<double>());
-  const long rss_before = rss_kb(child.pid, "VmRSS:");
+  const long rss_before = rss_kb(child.pid(), "VmRSS:");
   if (auto d = c.Get("/v1/depth"); d && d->status == 200) {
     const auto j = nlohmann::json::parse(d->body);
     std::printf("latest /v1/depth: pair %lld, board_found %s, %s, %zu bytes\n", j["pair"].get<long long>(),
@@ -339,9 +307,9 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   // client counted it and as naneyed counted it (naneye_depth_served_total), with where the two
   // cores' time went during the load.
   const auto served0 = metric(c, "naneye_depth_served_total");
-  const auto cpu0 = cpu_now(child.pid);
+  const auto cpu0 = cpu_now(child.pid());
   auto load = bench::http_load(port, "/v1/depth", connections, seconds);
-  const auto cpu1 = cpu_now(child.pid);
+  const auto cpu1 = cpu_now(child.pid());
   const auto served1 = metric(c, "naneye_depth_served_total");
   auto s2 = status();
   const double el = load.seconds;
@@ -377,8 +345,8 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   std::printf(
       "naneyed RSS: %ld kB after %.0f s streaming, %ld kB after the load (anonymous %ld kB, file-backed "
       "i.e. shared libraries %ld kB), peak %ld kB\n",
-      rss_before, seconds, rss_kb(child.pid, "VmRSS:"), rss_kb(child.pid, "RssAnon:"),
-      rss_kb(child.pid, "RssFile:"), rss_kb(child.pid, "VmHWM:"));
+      rss_before, seconds, rss_kb(child.pid(), "VmRSS:"), rss_kb(child.pid(), "RssAnon:"),
+      rss_kb(child.pid(), "RssFile:"), rss_kb(child.pid(), "VmHWM:"));
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <random>
 #include <vector>
 
@@ -59,12 +60,8 @@ Data make_data() {
   for (std::size_t i = 0; i < d.px.size(); ++i) {
     d.px_cv.at<cv::Vec2d>(static_cast<int>(i)) = cv::Vec2d(d.px[i].x(), d.px[i].y());
   }
-  d.K_cv = cv::Mat(3, 3, CV_64F);
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) d.K_cv.at<double>(r, c) = cam.K()(r, c);
-  }
-  const auto& dist = cam.distortion();
-  d.D_cv = (cv::Mat_<double>(1, 5) << dist.k1, dist.k2, dist.p1, dist.p2, dist.k3);
+  cv::eigen2cv(cam.K(), d.K_cv);
+  cv::eigen2cv(cam.distortion().opencv_order(), d.D_cv);
 
   const std::array<double, 6> depths = {15.0, 30.0, 50.0, 70.0, 95.0, 120.0};
   int k = 0;

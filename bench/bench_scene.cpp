@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/pair/opencv_path.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 #include "naneye/sim/textured.hpp"
@@ -82,15 +83,7 @@ void opencv_path(const recon::StereoRig& rig, const recon::scene::StereoLuma& lu
       gl.push_back(pl[i]);
       gr.push_back(pr[i]);
     }
-  cv::Mat K1, K2, R, T;
-  cv::eigen2cv(rig.left.K(), K1);
-  cv::eigen2cv(rig.right.K(), K2);
-  cv::eigen2cv(rig.R, R);
-  cv::eigen2cv(rig.T, T);
-  const auto& d1 = rig.left.distortion();
-  const auto& d2 = rig.right.distortion();
-  const cv::Mat D1 = (cv::Mat_<double>(1, 5) << d1.k1, d1.k2, d1.p1, d1.p2, d1.k3);
-  const cv::Mat D2 = (cv::Mat_<double>(1, 5) << d2.k1, d2.k2, d2.p1, d2.p2, d2.k3);
+  const auto [K1, D1, K2, D2, R, T] = recon::opencv_rig(rig);
   cv::Mat X;
   if (!gl.empty()) {
     std::vector<cv::Point2f> nl, nr;
@@ -146,15 +139,8 @@ struct OpenCvDense {
   cv::Ptr<cv::StereoSGBM> sgbm;
   int min_disp = 0, num_disp = 48;
   explicit OpenCvDense(const recon::StereoRig& rig) {
-    cv::Mat K1, K2, R, T, R2, P1, P2;
-    cv::eigen2cv(rig.left.K(), K1);
-    cv::eigen2cv(rig.right.K(), K2);
-    cv::eigen2cv(rig.R, R);
-    cv::eigen2cv(rig.T, T);
-    const auto& d1 = rig.left.distortion();
-    const auto& d2 = rig.right.distortion();
-    const cv::Mat D1 = (cv::Mat_<double>(1, 5) << d1.k1, d1.k2, d1.p1, d1.p2, d1.k3);
-    const cv::Mat D2 = (cv::Mat_<double>(1, 5) << d2.k1, d2.k2, d2.p1, d2.p2, d2.k3);
+    const auto [K1, D1, K2, D2, R, T] = recon::opencv_rig(rig);
+    cv::Mat R2, P1, P2;
     const cv::Size size(rig.left.width(), rig.left.height());
     cv::stereoRectify(K1, D1, K2, D2, size, R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY, 0);
     cv::initUndistortRectifyMap(K1, D1, R1, P1, size, CV_32FC1, m1x, m1y);

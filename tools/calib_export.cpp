@@ -28,10 +28,7 @@ std::string list(const M& m) {
 }
 
 Eigen::Matrix<double, 1, 5> dist(const recon::CameraModel& cam) {
-  const auto& d = cam.distortion();
-  Eigen::Matrix<double, 1, 5> v;
-  v << d.k1, d.k2, d.p1, d.p2, d.k3;
-  return v;
+  return cam.distortion().opencv_order();
 }
 
 void check_representable(const recon::CameraModel& cam, const char* side) {

@@ -72,8 +72,9 @@ void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& 
 
 void run_calibrate(const CalibrateOptions& o) {
   recon::CornerSettings corners;
-  parse_pattern(o.pattern, corners.rows, corners.cols);
-  const recon::BoardGeometry board{corners.rows, corners.cols, o.square_mm};
+  parse_pattern(o.pattern, corners.board.rows, corners.board.cols);
+  corners.board.square_mm = o.square_mm;
+  const recon::BoardGeometry& board = corners.board;
   std::vector<std::filesystem::path> guess_files(o.guess.begin(), o.guess.end());
   if (guess_files.empty()) guess_files.push_back(sim::find_calibration("paper-d3.yaml"));
   const recon::StereoRig guess = recon::load_rig(guess_files);

@@ -33,9 +33,7 @@ recon::RawImageView image_view(const driver::Frame& f) {
 
 recon::StereoReconstructorSettings reconstructor_settings(const Settings& s) {
   recon::StereoReconstructorSettings r;
-  r.corners.rows = s.board_rows;
-  r.corners.cols = s.board_cols;
-  r.reconstruction.board.square_mm = s.square_mm;
+  r.corners.board = {s.board_rows, s.board_cols, s.square_mm};
   r.reconstruction.corner_sigma_px = s.corner_sigma_px;
   r.tracking = s.tracking;
   return r;

@@ -226,16 +226,11 @@ void save_rig(const StereoRig& rig, const std::filesystem::path& file) {
     cv::eigen2cv(Eigen::MatrixXd(m), cvm);
     fs << key << cvm;
   };
-  auto dist = [](const Distortion& d) {
-    Eigen::Matrix<double, 1, 5> v;
-    v << d.k1, d.k2, d.p1, d.p2, d.k3;
-    return v;
-  };
   fs << "image_width" << rig.left.width() << "image_height" << rig.left.height();
   put("M1", rig.left.K());
-  put("D1", dist(rig.left.distortion()));
+  put("D1", rig.left.distortion().opencv_order());
   put("M2", rig.right.K());
-  put("D2", dist(rig.right.distortion()));
+  put("D2", rig.right.distortion().opencv_order());
   put("R", rig.R);
   put("T", rig.T);
   const auto& s = rig.sigmas;

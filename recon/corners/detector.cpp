@@ -95,18 +95,18 @@ bool CornerDetector::detect(const RawImageView& image, const CornerResult* previ
   out.found = false;
   out.tracked = false;
   out.count = 0;
-  out.rows = settings_.rows;
-  out.cols = settings_.cols;
+  out.rows = settings_.board.rows;
+  out.cols = settings_.board.cols;
   failure_ = CornerFailure::none;
   if (image.width != width_ || image.height != height_ || !image.data ||
-      settings_.rows * settings_.cols > kMaxCorners) {
+      settings_.board.rows * settings_.board.cols > kMaxCorners) {
     failure_ = CornerFailure::bad_input;
     return false;
   }
   row_begin_ = image.ignore_edge_rows;
   row_end_ = height_ - image.ignore_edge_rows;
   col_end_ = width_ - image.ignore_last_cols;
-  if (previous && previous->found && previous->rows == settings_.rows && previous->cols == settings_.cols) {
+  if (previous && previous->found && previous->rows == settings_.board.rows && previous->cols == settings_.board.cols) {
     // Tracking reads only the board's rows: the luminance of those (and their margin) only. A fit
     // window that reaches the band's edge fails the tracking, which then searches the whole image.
     const auto [lo, hi] = tracking_rows(*previous);
@@ -190,15 +190,15 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool
 
 bool CornerDetector::full_search(CornerResult& out) {
   const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
-  bool found = coarse_finder_.find(v, settings_.rows, settings_.cols, coarse_.data(), &noise_);
+  bool found = coarse_finder_.find(v, settings_.board.rows, settings_.board.cols, coarse_.data(), &noise_);
   if (!found && settings_.opencv_fallback) {
-    found = coarse_grid_opencv(v, settings_.rows, settings_.cols, gray8_, coarse_);
+    found = coarse_grid_opencv(v, settings_.board.rows, settings_.board.cols, gray8_, coarse_);
   }
   if (!found) {
     failure_ = CornerFailure::no_grid;
     return false;
   }
-  out.count = settings_.rows * settings_.cols;
+  out.count = settings_.board.rows * settings_.board.cols;
   for (int i = 0; i < out.count; ++i) {
     Corner& c = out.corners[static_cast<std::size_t>(i)];
     c = Corner{};

@@ -16,7 +16,7 @@ std::vector<cv::Point2f> detect_eye(const RawImageView& image, const OpenCvPathO
   cv::Mat gray8;
   cv::normalize(luma, gray8, 0, 255, cv::NORM_MINMAX, CV_8U);
   std::vector<cv::Point2f> pts;
-  if (!cv::findChessboardCorners(gray8, cv::Size(o.cols, o.rows), pts,
+  if (!cv::findChessboardCorners(gray8, cv::Size(o.board.cols, o.board.rows), pts,
                                  cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE))
     return {};
   cv::cornerSubPix(luma, pts, cv::Size(o.subpix_half_window, o.subpix_half_window), cv::Size(-1, -1),
@@ -24,23 +24,23 @@ std::vector<cv::Point2f> detect_eye(const RawImageView& image, const OpenCvPathO
   return pts;
 }
 
-cv::Mat camera_matrix(const CameraModel& c) {
-  cv::Mat K;
-  cv::eigen2cv(c.K(), K);
-  return K;
-}
-
-cv::Mat dist_coeffs(const CameraModel& c) {
-  const Distortion& d = c.distortion();
-  return (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3);
-}
-
 }  // namespace
+
+OpenCvRig opencv_rig(const StereoRig& rig) {
+  OpenCvRig o;
+  cv::eigen2cv(rig.left.K(), o.K1);
+  cv::eigen2cv(rig.right.K(), o.K2);
+  cv::eigen2cv(rig.left.distortion().opencv_order(), o.D1);
+  cv::eigen2cv(rig.right.distortion().opencv_order(), o.D2);
+  cv::eigen2cv(rig.R, o.R);
+  cv::eigen2cv(rig.T, o.T);
+  return o;
+}
 
 OpenCvPathResult opencv_reconstruct_pair(const StereoRig& rig, const RawImageView& left,
                                          const RawImageView& right, const OpenCvPathOptions& o) {
   OpenCvPathResult res;
-  const int n = o.rows * o.cols;
+  const int n = o.board.rows * o.board.cols;
   std::vector<cv::Point2f> pl = detect_eye(left, o);
   if (static_cast<int>(pl.size()) != n) return res;
   std::vector<cv::Point2f> pr = detect_eye(right, o);
@@ -54,14 +54,14 @@ OpenCvPathResult opencv_reconstruct_pair(const StereoRig& rig, const RawImageVie
   if (n <= kMaxCorners) {
     CornerResult c;
     c.found = true;
-    c.rows = o.rows;
-    c.cols = o.cols;
+    c.rows = o.board.rows;
+    c.cols = o.board.cols;
     c.count = n;
     for (int i = 0; i < n; ++i) {
       Corner& k = c.corners[static_cast<std::size_t>(i)];
       k.px = {pl[static_cast<std::size_t>(i)].x, pl[static_cast<std::size_t>(i)].y};
-      k.row = i / o.cols;
-      k.col = i % o.cols;
+      k.row = i / o.board.cols;
+      k.col = i % o.board.cols;
       k.contrast = i;
     }
     canonical_order(c);
@@ -73,14 +73,13 @@ OpenCvPathResult opencv_reconstruct_pair(const StereoRig& rig, const RawImageVie
     }
   }
 
+  const OpenCvRig cvr = opencv_rig(rig);
   std::vector<cv::Point2f> nl, nr;
-  cv::undistortPoints(pl, nl, camera_matrix(rig.left), dist_coeffs(rig.left));
-  cv::undistortPoints(pr, nr, camera_matrix(rig.right), dist_coeffs(rig.right));
+  cv::undistortPoints(pl, nl, cvr.K1, cvr.D1);
+  cv::undistortPoints(pr, nr, cvr.K2, cvr.D2);
   cv::Mat P1 = cv::Mat::eye(3, 4, CV_64F), P2(3, 4, CV_64F);
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) P2.at<double>(r, c) = rig.R(r, c);
-    P2.at<double>(r, 3) = rig.T(r);
-  }
+  cvr.R.copyTo(P2.colRange(0, 3));
+  cvr.T.copyTo(P2.col(3));
   cv::Mat X;  // 4 x n homogeneous
   cv::triangulatePoints(P1, P2, nl, nr, X);
   X.convertTo(X, CV_64F);

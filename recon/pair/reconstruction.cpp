@@ -17,9 +17,8 @@ double measured_corner_sigma(const BoardPose& pose, const ReconstructionSettings
   return std::max(settings.min_corner_sigma_px, std::sqrt(cost / dof));
 }
 
-void reconstruct_pair(const StereoRig& rig, const ReconstructionSettings& s,
+void reconstruct_pair(const StereoRig& rig, const BoardGeometry& b, const ReconstructionSettings& s,
                       std::span<const CornerObservation> obs, PairResult& out) {
-  const BoardGeometry& b = s.board;
   out.board_found = false;
   out.board.reset();
   out.metrics.reset();

@@ -25,8 +25,6 @@ StereoReconstructor::StereoReconstructor(const StereoRig& rig, const StereoRecon
       settings_(settings),
       left_detector_(rig.left, settings.corners),
       right_detector_(rig.right, settings.corners) {
-  settings_.reconstruction.board.rows = settings.corners.rows;
-  settings_.reconstruction.board.cols = settings.corners.cols;
 }
 
 void StereoReconstructor::set_rig(const StereoRig& rig) {
@@ -76,7 +74,7 @@ PairOutcome StereoReconstructor::process(const RawImageView& left, const RawImag
     o.left_ok = (l.flags & unusable) == 0;
     o.right_ok = (r.flags & unusable) == 0;
   }
-  reconstruct_pair(rig_, settings_.reconstruction,
+  reconstruct_pair(rig_, settings_.corners.board, settings_.reconstruction,
                    std::span<const CornerObservation>(observations_.data(), static_cast<std::size_t>(n)),
                    out);
   if (!out.board_found) return fail(PairOutcome::pose_failed);

@@ -103,7 +103,7 @@ CaptureSummary write_capture(const CaptureOptions& o) {
 
   nlohmann::json truth;
   truth["square_mm"] = scene.board.square_mm;
-  truth["pattern"] = {scene.board.inner_rows(), scene.board.inner_cols()};
+  truth["pattern"] = {scene.board.rows, scene.board.cols};
   truth["preset"] = preset->name;
   truth["calibration"] = calib.filename().string();
   truth["seed"] = o.seed;

@@ -42,7 +42,7 @@ bool pose_fully_visible(const recon::StereoRig& rig, const BoardGeometry& board,
                         const PoseSettings& s) {
   const Truth t = compute_truth(rig, board, pose);
   const double lo = s.margin_px, hi = 247.0 - s.margin_px;  // last active column is 248
-  for (int k = 0; k < board.inner_count(); ++k) {
+  for (int k = 0; k < board.count(); ++k) {
     if (!t.left_imaged[k] || !t.right_imaged[k]) return false;
     for (const auto* px : {&t.left_px[k], &t.right_px[k]})
       if (px->x() < lo || px->x() > hi || px->y() < lo || px->y() > hi) return false;
@@ -98,7 +98,7 @@ Pose sample_partial_pose(const recon::StereoRig& rig, const BoardGeometry& board
   const Eigen::Vector3d step =
       0.02 * p.t.z() * Eigen::Vector3d(std::cos(dir), std::sin(dir), 0.0);  // ~4 px per step at the centre
   // Slide until at least a fifth of the corners have left one image, but some remain in both.
-  const int n = board.inner_count();
+  const int n = board.count();
   for (int i = 0; i < 200; ++i) {
     p.t += step;
     const Truth t = compute_truth(rig, board, p);

@@ -50,10 +50,10 @@ struct Pattern {
   explicit Pattern(const SceneSettings& sc)
       : s(sc.board.square_mm),
         u0(-sc.board.square_mm),
-        u1((sc.board.square_cols - 1) * sc.board.square_mm),
+        u1(sc.board.cols * sc.board.square_mm),
         v0(-sc.board.square_mm),
-        v1((sc.board.square_rows - 1) * sc.board.square_mm),
-        m(sc.board.border_squares * sc.board.square_mm),
+        v1(sc.board.rows * sc.board.square_mm),
+        m(sc.border_squares * sc.board.square_mm),
         white(sc.white),
         black(sc.black) {}
   double operator()(double u, double v) const {

@@ -6,15 +6,6 @@
 
 namespace naneye::sim {
 
-Eigen::Vector3d BoardGeometry::corner(int k) const {
-  const int i = k / inner_cols(), j = k % inner_cols();
-  return {j * square_mm, i * square_mm, 0.0};
-}
-
-Eigen::Vector3d BoardGeometry::centre() const {
-  return {0.5 * (inner_cols() - 1) * square_mm, 0.5 * (inner_rows() - 1) * square_mm, 0.0};
-}
-
 namespace {
 
 // A corner is imaged when it lies in front of the camera and inside the valid domain: undistorting
@@ -40,7 +31,7 @@ Truth compute_truth(const recon::StereoRig& rig, const BoardGeometry& board, con
   Truth t;
   t.pose = pose;
   t.board_present = board_present;
-  const int n = board.inner_count();
+  const int n = board.count();
   t.corners_mm.resize(n);
   t.left_px.resize(n);
   t.right_px.resize(n);

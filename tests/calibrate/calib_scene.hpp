@@ -39,8 +39,8 @@ inline std::vector<recon::CalibrationView> noisy_views(const recon::StereoRig& r
   for (const auto& pose : poses) {
     const sim::Truth t = sim::compute_truth(rig, board, pose);
     recon::CalibrationView v;
-    for (int k = 0; k < board.inner_count(); ++k) {
-      const int row = k / board.inner_cols(), col = k % board.inner_cols();
+    for (int k = 0; k < board.count(); ++k) {
+      const int row = k / board.cols, col = k % board.cols;
       const auto k_ = static_cast<std::size_t>(k);
       if (t.left_in_view[k_])
         v.left.push_back({row, col, t.left_px[k_] + Eigen::Vector2d(noise(rng), noise(rng))});

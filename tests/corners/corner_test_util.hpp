@@ -24,8 +24,8 @@ inline const sim::Renderer& renderer(bool bayer, Scene scene = Scene::board) {
     sim::SceneSettings s;
     s.board_present = scene != Scene::no_board;
     if (scene == Scene::small_board) {  // 8 x 6 squares: 7 x 5 inner corners
-      s.board.square_rows = 6;
-      s.board.square_cols = 8;
+      s.board.rows = 5;
+      s.board.cols = 7;
     }
     sim::SensorSettings sensor;
     sensor.bayer = bayer;

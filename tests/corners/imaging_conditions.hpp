@@ -1,5 +1,5 @@
 #pragma once
-// The imaging-condition matrix of issue #12 (docs/corners.md, "Across imaging conditions"): the
+// The imaging-condition matrix (docs/corners.md, "Across imaging conditions"): the
 // simulator's sensor and scene changed one way at a time from a sensor close to the measured real
 // NanEye (/work/shared/notes/measurements.md: blur ~1 px, shot-noise slope 0.14 DN per electron,
 // read noise 2.5 DN, column FPN 0.55 DN, DSNU 3.8 DN, PRNU 2 %, a reset line of 3 rows at -16 DN).
@@ -63,7 +63,7 @@ inline std::vector<ImagingCondition> imaging_conditions() {
   add("bright: whites clipped", [](ImagingCondition& c) { c.sensor.white_dn = 1300; });
   add("blur sigma 1.5 px", [](ImagingCondition& c) { c.sensor.defocus_sigma_px = 1.485; });
   add("grey background, no white margin", [](ImagingCondition& c) {
-    c.scene.board.border_squares = 0.0;
+    c.scene.border_squares = 0.0;
     c.scene.background = 0.5;
   });
   add("low-contrast print (black 45 % of white)", [](ImagingCondition& c) { c.scene.black = 0.45; });

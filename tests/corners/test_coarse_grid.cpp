@@ -105,8 +105,8 @@ TEST(CoarseGrid, NoBoardNoGrid) {
 TEST(CoarseGrid, PatternSizeIsExact) {
   const StereoRig& rig = test::paper_d3();
   CornerSettings s;
-  s.rows = 5;
-  s.cols = 7;
+  s.board.rows = 5;
+  s.board.cols = 7;
   CornerDetector det(rig.left, s);
   std::mt19937_64 rng(43);
   int in_view = 0, found_small = 0, found_large = 0;

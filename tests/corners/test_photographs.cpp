@@ -50,8 +50,8 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   }
   const CameraModel cam = sample_camera();
   CornerSettings s;
-  s.rows = 6;
-  s.cols = 9;
+  s.board.rows = 6;
+  s.board.cols = 9;
   CornerDetector det(cam, s);
   int images = 0, found = 0;
   double worst = 0, sum2 = 0;

@@ -121,6 +121,7 @@ class DaemonProcess {
   std::string log() const { return read_file(log_); }
   std::string out() const { return read_file(log_.string() + ".out"); }
   bool running() const { return pid_ > 0 && !exited_; }
+  pid_t pid() const { return pid_; }
 
  private:
   std::filesystem::path log_;

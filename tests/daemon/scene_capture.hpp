@@ -1,5 +1,5 @@
 #pragma once
-// Textured scenes for the daemon's scene tests (issue 14): pairs rendered through the paper's
+// Textured scenes for the daemon's scene tests: pairs rendered through the paper's
 // Dataset 3 rig with one sub-sample per pixel (a third of the tests/scene renders' cost: these
 // tests check the daemon's plumbing against the truth, not the matcher's last digit).
 #include <filesystem>

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "naneyed_fixture.hpp"
+#include "raw_client.hpp"
 
 using namespace naneye::daemon::test;
 
@@ -17,39 +18,8 @@ namespace {
 
 constexpr const char* kToken = "3f1c0e6b9a8d4c2e7f5a1b3c9d0e8f7a";
 
-// Sends `request` to addr:port on a fresh connection and returns everything until the server closes
-// (or 5 s pass).
-std::string round_trip(int port, const std::string& request, in_addr_t addr = htonl(INADDR_LOOPBACK)) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  a.sin_addr.s_addr = addr;
-  std::string in;
-  if (connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-      send(fd, request.data(), request.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(request.size())) {
-    char buf[4096];
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-    for (;;) {
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
-      pollfd p{fd, POLLIN, 0};
-      if (left.count() <= 0 || poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
-      const ssize_t n = recv(fd, buf, sizeof buf, 0);
-      if (n <= 0) break;
-      in.append(buf, static_cast<std::size_t>(n));
-    }
-  }
-  close(fd);
-  return in;
-}
-
 std::string get(const std::string& path, const std::string& headers) {
   return "GET " + path + " HTTP/1.1\r\n" + headers + "Connection: close\r\n\r\n";
-}
-
-int status_of(const std::string& response) {
-  return response.rfind("HTTP/1.1 ", 0) == 0 ? std::stoi(response.substr(9, 3)) : 0;
 }
 
 std::string body_of(const std::string& response) {

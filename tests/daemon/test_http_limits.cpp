@@ -8,69 +8,11 @@
 #include <unistd.h>
 
 #include "naneyed_fixture.hpp"
+#include "raw_client.hpp"
 
 using namespace naneye::daemon::test;
 
 namespace {
-
-// A client socket to the daemon that sends what it is told, when it is told.
-class Raw {
- public:
-  explicit Raw(int port) : fd_(socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<std::uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ok_ = connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  }
-  ~Raw() { close(fd_); }
-  Raw(const Raw&) = delete;
-  Raw& operator=(const Raw&) = delete;
-  bool connected() const { return ok_; }
-  bool send(const std::string& s) {
-    return ::send(fd_, s.data(), s.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(s.size());
-  }
-  // Everything the server sends until it closes or `timeout` has passed.
-  std::string read_all(std::chrono::milliseconds timeout = std::chrono::seconds(5)) {
-    std::string in;
-    char buf[4096];
-    const auto until = std::chrono::steady_clock::now() + timeout;
-    for (;;) {
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
-      pollfd p{fd_, POLLIN, 0};
-      if (left.count() <= 0 || poll(&p, 1, static_cast<int>(left.count())) <= 0) break;
-      const ssize_t n = recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) break;
-      in.append(buf, static_cast<std::size_t>(n));
-    }
-    return in;
-  }
-  // The status code of the first response line, 0 if none came within `timeout`.
-  int status(std::chrono::milliseconds timeout = std::chrono::seconds(5)) {
-    std::string in;
-    char buf[512];
-    const auto until = std::chrono::steady_clock::now() + timeout;
-    while (in.size() < 12) {
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
-      pollfd p{fd_, POLLIN, 0};
-      if (left.count() <= 0 || poll(&p, 1, static_cast<int>(left.count())) <= 0) return 0;
-      const ssize_t n = recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) return 0;
-      in.append(buf, static_cast<std::size_t>(n));
-    }
-    return in.rfind("HTTP/1.1 ", 0) == 0 ? std::stoi(in.substr(9, 3)) : 0;
-  }
-
- private:
-  int fd_;
-  bool ok_ = false;
-};
-
-int status_of(const std::string& response) {
-  return response.rfind("HTTP/1.1 ", 0) == 0 ? std::stoi(response.substr(9, 3)) : 0;
-}
 
 std::string source(const std::filesystem::path& file) {
   return "[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n";
@@ -93,9 +35,9 @@ TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
   if (rl.rlim_cur < 1200) GTEST_SKIP() << "needs 1200 descriptors, the hard limit is " << rl.rlim_max;
   start(source(capture(20)));
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
-  std::vector<std::unique_ptr<Raw>> slow;
+  std::vector<std::unique_ptr<RawClient>> slow;
   for (int i = 0; i < 500; ++i) {
-    slow.push_back(std::make_unique<Raw>(port));
+    slow.push_back(std::make_unique<RawClient>(port));
     ASSERT_TRUE(slow.back()->connected()) << i;
     ASSERT_TRUE(slow.back()->send("GET /v1/status HTTP/1.1\r\nHo")) << i;
   }
@@ -124,7 +66,7 @@ TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
 
 TEST_F(NaneyedTest, AHeadThatDoesNotArriveInTimeGets408AndTheConnectionCloses) {
   start("head_timeout_ms = 300\n" + source(capture(12)));
-  Raw conn(port);
+  RawClient conn(port);
   ASSERT_TRUE(conn.connected());
   const auto t0 = std::chrono::steady_clock::now();
   ASSERT_TRUE(conn.send("GET /v1/status HTTP/1.1\r\n"));
@@ -164,7 +106,7 @@ TEST_F(NaneyedTest, OversizeRequestsAreRefusedBeforeTheyAreRead) {
       {"GET /v1/status HTTP/1.1\r\nContent-Length: -1\r\n\r\n", 400, "bad_request"},
   };
   for (const auto& c : cases) {
-    Raw conn(port);
+    RawClient conn(port);
     ASSERT_TRUE(conn.connected());
     conn.send(c.request);
     const std::string r = conn.read_all();
@@ -172,7 +114,7 @@ TEST_F(NaneyedTest, OversizeRequestsAreRefusedBeforeTheyAreRead) {
     EXPECT_NE(r.find(c.error), std::string::npos) << r;
   }
   // A small body is read and the request served; the next request on the connection is too.
-  Raw conn(port);
+  RawClient conn(port);
   conn.send(
       "GET /healthz HTTP/1.1\r\nContent-Length: 3\r\n\r\nabcGET /healthz HTTP/1.1\r\nConnection: "
       "close\r\n\r\n");
@@ -186,9 +128,9 @@ TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503
   start("max_connections = 8\n" + source(capture(12)));
   {
     // Eight idle keep-alive connections (each served once) are closed, oldest first, for newcomers.
-    std::vector<std::unique_ptr<Raw>> idle;
+    std::vector<std::unique_ptr<RawClient>> idle;
     for (int i = 0; i < 8; ++i) {
-      idle.push_back(std::make_unique<Raw>(port));
+      idle.push_back(std::make_unique<RawClient>(port));
       idle.back()->send("GET /healthz HTTP/1.1\r\n\r\n");
       ASSERT_EQ(idle.back()->status(), 200) << i;
     }
@@ -197,15 +139,15 @@ TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503
     EXPECT_EQ(j["http"]["refused"], 0);
   }
   // Eight connections in the middle of their heads hold every place: the ninth is told at once.
-  std::vector<std::unique_ptr<Raw>> slow;
+  std::vector<std::unique_ptr<RawClient>> slow;
   for (int i = 0; i < 8; ++i) {
-    slow.push_back(std::make_unique<Raw>(port));
+    slow.push_back(std::make_unique<RawClient>(port));
     slow.back()->send("GET /v1/status HTTP/1.1\r\n");
   }
   // Let the daemon's poll thread (nice 5) read the eight partial heads and see the closed ones:
   // a connection that has sent nothing yet may be closed for a newcomer, so the ninth would be served.
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  Raw late(port);
+  RawClient late(port);
   late.send("GET /v1/status HTTP/1.1\r\n\r\n");
   const std::string r = late.read_all(std::chrono::milliseconds(1000));
   EXPECT_EQ(status_of(r), 503) << r;
@@ -240,9 +182,9 @@ TEST_F(NaneyedTest, EventSlotsComeBackWhenClientsLeaveWhateverTheyAskedFor) {
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
   for (int round = 0; round < 2; ++round) {
     {
-      std::vector<std::unique_ptr<Raw>> gone;
+      std::vector<std::unique_ptr<RawClient>> gone;
       for (int i = 0; i < 4; ++i) {
-        gone.push_back(std::make_unique<Raw>(port));
+        gone.push_back(std::make_unique<RawClient>(port));
         gone.back()->send("GET /v1/events?last_event_id=999999999999 HTTP/1.1\r\n\r\n");
         ASSERT_EQ(gone.back()->status(), 200) << i;
       }
@@ -251,7 +193,7 @@ TEST_F(NaneyedTest, EventSlotsComeBackWhenClientsLeaveWhateverTheyAskedFor) {
     wait_status([](const nlohmann::json& s) { return s["events"]["clients"] == 0; }, std::chrono::seconds(5));
   }
   // A future id starts the stream at the latest result (numbers restart with the daemon).
-  Raw fresh(port);
+  RawClient fresh(port);
   fresh.send("GET /v1/events?last_event_id=999999999999 HTTP/1.1\r\n\r\n");
   const std::string r = fresh.read_all(std::chrono::milliseconds(1500));
   EXPECT_EQ(status_of(r), 200) << r.substr(0, 200);

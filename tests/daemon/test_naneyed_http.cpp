@@ -6,65 +6,11 @@
 #include <unistd.h>
 
 #include "naneyed_fixture.hpp"
+#include "raw_client.hpp"
 
 using namespace naneye::daemon::test;
 
 namespace {
-
-// One raw HTTP/1.1 response read off a socket: status, headers block, body.
-struct RawResponse {
-  int status = 0;
-  std::string head, body;
-};
-
-class RawConnection {
- public:
-  explicit RawConnection(int port) : fd_(socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<std::uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected_ = connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-    timeval tv{5, 0};
-    setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  }
-  ~RawConnection() { close(fd_); }
-  bool connected() const { return connected_; }
-
-  // Sends a GET and reads its whole response; nullopt when the server closed the connection first.
-  std::optional<RawResponse> get(const std::string& path, const std::string& headers = "") {
-    const std::string req = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + headers + "\r\n";
-    if (send(fd_, req.data(), req.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(req.size())) return {};
-    std::string in;
-    std::size_t blank = std::string::npos, total = 0;
-    char buf[8192];
-    while (blank == std::string::npos || in.size() < total) {
-      const ssize_t n = recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) return {};
-      in.append(buf, static_cast<std::size_t>(n));
-      if (blank == std::string::npos && (blank = in.find("\r\n\r\n")) != std::string::npos) {
-        const auto cl = in.find("Content-Length: ");
-        if (cl == std::string::npos || cl > blank) return {};
-        total = blank + 4 + std::stoull(in.substr(cl + 16));
-      }
-    }
-    RawResponse r;
-    r.status = std::stoi(in.substr(9, 3));
-    r.head = in.substr(0, blank);
-    r.body = in.substr(blank + 4);
-    return r;
-  }
-
-  // True when the server has closed its side (recv sees the end of the stream).
-  bool closed_by_server() {
-    char c;
-    return recv(fd_, &c, 1, 0) == 0;
-  }
-
- private:
-  int fd_;
-  bool connected_ = false;
-};
 
 double metric(httplib::Client& c, const std::string& name) {
   const auto m = c.Get("/metrics");
@@ -93,7 +39,7 @@ TEST_F(NaneyedTest, AKeepAliveConnectionServesAHundredRequestsAndEachIsCounted) 
 
   // httplib's default would close the connection after 5 requests; naneyed keeps it for 100, then
   // closes it so that a waiting connection gets the thread.
-  RawConnection conn(port);
+  RawClient conn(port);
   ASSERT_TRUE(conn.connected());
   for (int k = 1; k <= 100; ++k) {
     const auto r = conn.get("/v1/depth");
@@ -157,7 +103,7 @@ TEST_F(NaneyedTest, BodiesAreNeverCompressedEvenWhenTheClientAcceptsIt) {
   const auto file = capture(12);
   start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] == 12; });
-  RawConnection conn(port);
+  RawClient conn(port);
   ASSERT_TRUE(conn.connected());
   for (const char* path : {"/v1/depth", "/v1/status", "/metrics", "/v1/points", "/v1/nothing"}) {
     for (const char* enc : {"br", "gzip, deflate, br", "gzip"}) {
@@ -182,7 +128,7 @@ TEST_F(NaneyedTest, InvalidUtf8FromAClientGets400AndTheDaemonLives) {
   const auto file = capture(12);
   start("[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n");
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
-  RawConnection conn(port);
+  RawClient conn(port);
   ASSERT_TRUE(conn.connected());
   struct Case {
     const char* path;

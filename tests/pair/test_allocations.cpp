@@ -60,7 +60,7 @@ TEST(Allocations, ReconstructPairAllocatesNothingPerPair) {
     ASSERT_EQ(n, 48);
     const long before = naneye::test::heap_allocations();
     recon::reconstruct_pair(
-        rec.rig(), rec.settings().reconstruction,
+        rec.rig(), rec.settings().corners.board, rec.settings().reconstruction,
         std::span<const recon::CornerObservation>(obs.data(), static_cast<std::size_t>(n)), out);
     const long used = naneye::test::heap_allocations() - before;
     ASSERT_TRUE(out.board_found);

@@ -17,6 +17,8 @@ StereoRig rig_d3() {
   return load_rig(std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml");
 }
 
+const BoardGeometry kBoard;  // the paper's board
+
 struct Board {
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
@@ -26,7 +28,7 @@ struct Board {
 Board board_at(double tilt_deg, double z, const BoardGeometry& b, Eigen::Vector2d offset = {0, 0}) {
   Board s;
   s.R = Eigen::AngleAxisd(tilt_deg * M_PI / 180, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
-  const Eigen::Vector3d centre((b.cols - 1) * b.square_mm / 2, (b.rows - 1) * b.square_mm / 2, 0);
+  const Eigen::Vector3d centre = b.centre();
   s.t = Eigen::Vector3d(offset.x(), offset.y(), z) - s.R * centre;
   return s;
 }
@@ -64,16 +66,16 @@ TEST(PairReconstruction, ExactDataGivesExactPointsAndZeroCriteria) {
   const StereoRig rig = rig_d3();
   ReconstructionSettings s;
   std::mt19937 rng(1);
-  const Board board = board_at(30, 70, s.board);
-  const auto obs = observe(rig, s.board, board, 0.0, rng);
+  const Board board = board_at(30, 70, kBoard);
+  const auto obs = observe(rig, kBoard, board, 0.0, rng);
   PairResult out;
-  reconstruct_pair(rig, s, obs, out);
+  reconstruct_pair(rig, kBoard, s, obs, out);
   ASSERT_TRUE(out.board_found);
   ASSERT_EQ(out.point_count, 48);
   for (int i = 0; i < 48; ++i) {
     const auto& p = out.points[i];
     ASSERT_TRUE(p.valid) << i;
-    const Eigen::Vector3d truth = board.at(s.board, p.row, p.col);
+    const Eigen::Vector3d truth = board.at(kBoard, p.row, p.col);
     EXPECT_LT((p.xyz_mm - truth).norm(), 1e-8) << i;
     EXPECT_LT((p.xyz_board_mm - truth).norm(), 1e-8) << i;
     EXPECT_EQ(p.id, p.row * 8 + p.col);
@@ -96,11 +98,11 @@ TEST(PairReconstruction, SigmaIsMeasuredFromThePairsResiduals) {
   double sum = 0;
   const int trials = 50;
   for (int k = 0; k < trials; ++k) {
-    const auto obs = observe(rig, s.board, board_at(20, 70, s.board), 0.2, rng);
+    const auto obs = observe(rig, kBoard, board_at(20, 70, kBoard), 0.2, rng);
     PairResult out;
-    reconstruct_pair(rig, s, obs, out);
+    reconstruct_pair(rig, kBoard, s, obs, out);
     ASSERT_TRUE(out.board_found);
-    const BoardPose pose = estimate_board_pose(rig, s.board, obs, 1.0);
+    const BoardPose pose = estimate_board_pose(rig, kBoard, obs, 1.0);
     sum += measured_corner_sigma(pose, s) / trials;
   }
   EXPECT_NEAR(sum, 0.2, 0.02);
@@ -111,16 +113,16 @@ TEST(PairReconstruction, TriangulatedDepthSigmaIsHonest) {
   const StereoRig rig = rig_d3();
   ReconstructionSettings s;
   std::mt19937 rng(5);
-  const Board board = board_at(10, 70, s.board);
+  const Board board = board_at(10, 70, kBoard);
   const int trials = 300;
   std::vector<double> err;
   double mean_sigma = 0;
   for (int k = 0; k < trials; ++k) {
     PairResult out;
-    reconstruct_pair(rig, s, observe(rig, s.board, board, 0.1, rng), out);
+    reconstruct_pair(rig, kBoard, s, observe(rig, kBoard, board, 0.1, rng), out);
     const auto& p = out.points[20];
     ASSERT_TRUE(p.valid);
-    err.push_back(p.xyz_mm.z() - board.at(s.board, p.row, p.col).z());
+    err.push_back(p.xyz_mm.z() - board.at(kBoard, p.row, p.col).z());
     mean_sigma += p.depth_sigma_mm / trials;
   }
   double var = 0;
@@ -133,14 +135,14 @@ TEST(PairReconstruction, CornersBeyondTheFoldAreFlaggedNotNumbers) {
   ReconstructionSettings s;
   std::mt19937 rng(3);
   // A close board, off to the top-left corner: some corners land beyond the left camera's fold.
-  const Board board = board_at(0, 30, s.board, {-14, -14});
-  const auto obs = observe(rig, s.board, board, 0.0, rng);
+  const Board board = board_at(0, 30, kBoard, {-14, -14});
+  const auto obs = observe(rig, kBoard, board, 0.0, rng);
   int beyond = 0;
   for (const auto& o : obs) beyond += !o.left_ok;
   ASSERT_GT(beyond, 0);
   ASSERT_LT(beyond, 40);
   PairResult out;
-  reconstruct_pair(rig, s, obs, out);
+  reconstruct_pair(rig, kBoard, s, obs, out);
   ASSERT_TRUE(out.board_found);
   int invalid = 0;
   for (int i = 0; i < out.point_count; ++i) {
@@ -149,7 +151,7 @@ TEST(PairReconstruction, CornersBeyondTheFoldAreFlaggedNotNumbers) {
     EXPECT_EQ(p.valid, o.left_ok && o.right_ok) << i;
     invalid += !p.valid;
     if (p.valid) {
-      EXPECT_LT((p.xyz_mm - board.at(s.board, p.row, p.col)).norm(), 1e-8);
+      EXPECT_LT((p.xyz_mm - board.at(kBoard, p.row, p.col)).norm(), 1e-8);
     }
   }
   EXPECT_EQ(invalid, beyond);
@@ -160,7 +162,7 @@ TEST(PairReconstruction, NoCornersNoBoard) {
   const StereoRig rig = rig_d3();
   PairResult out;
   out.board_found = true;
-  reconstruct_pair(rig, ReconstructionSettings{}, {}, out);
+  reconstruct_pair(rig, kBoard, ReconstructionSettings{}, {}, out);
   EXPECT_FALSE(out.board_found);
   EXPECT_FALSE(out.board);
   EXPECT_FALSE(out.metrics);

@@ -7,9 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/geometry/board_pose.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/geometry/board_pose.hpp"
 #include "naneye/recon/paper/division_model.hpp"
+#include "naneye/recon/paper/division_rig.hpp"
 
 namespace division_test {
 
@@ -31,7 +32,7 @@ inline BoardPlacement place_board(double tilt_x_deg, double tilt_y_deg, double z
   s.R = (Eigen::AngleAxisd(tilt_y_deg * M_PI / 180, Eigen::Vector3d::UnitY()) *
          Eigen::AngleAxisd(tilt_x_deg * M_PI / 180, Eigen::Vector3d::UnitX()))
             .toRotationMatrix();
-  const Eigen::Vector3d centre((b.cols - 1) * b.square_mm / 2, (b.rows - 1) * b.square_mm / 2, 0);
+  const Eigen::Vector3d centre = b.centre();
   s.t = Eigen::Vector3d(dx, dy, z_mm) - s.R * centre;
   return s;
 }
@@ -52,6 +53,30 @@ inline Eigen::Matrix3d plane_homography(const StereoRig& rig, const BoardPlaceme
   const Eigen::Vector3d n = s.R.col(2);
   const double d = n.dot(s.t);
   return rig.R + rig.T * n.transpose() / d;
+}
+
+// The 6 x 8 board at a placement as a division rig sees it, with Gaussian pixel noise when rng is given.
+struct Views {
+  std::vector<Eigen::Vector3d> truth;
+  std::vector<Eigen::Vector2d> left, right;
+};
+
+inline Views render(const DivisionRig& rig, const BoardPlacement& s, double noise_px = 0,
+                    std::mt19937* rng = nullptr) {
+  const BoardGeometry b;
+  std::normal_distribution<double> n(0, noise_px);
+  Views v;
+  for (int r = 0; r < b.rows; ++r) {
+    for (int c = 0; c < b.cols; ++c) {
+      const Eigen::Vector3d X = s.R * b.corner(r, c) + s.t;
+      v.truth.push_back(X);
+      v.left.push_back(*rig.left.project(X) +
+                       (rng ? Eigen::Vector2d(n(*rng), n(*rng)) : Eigen::Vector2d::Zero()));
+      v.right.push_back(*rig.right.project(rig.R * X + rig.T) +
+                        (rng ? Eigen::Vector2d(n(*rng), n(*rng)) : Eigen::Vector2d::Zero()));
+    }
+  }
+  return v;
 }
 
 // Renders a point with pinhole K and a division model (the truth of the division tests).

@@ -12,31 +12,6 @@ using namespace division_test;
 
 namespace {
 
-struct Views {
-  std::vector<Eigen::Vector3d> truth;
-  std::vector<Eigen::Vector2d> left, right;
-};
-
-Views render(const DivisionRig& rig, const BoardPlacement& s, double noise_px = 0,
-             std::mt19937* rng = nullptr) {
-  const BoardGeometry b;
-  std::normal_distribution<double> n(0, noise_px);
-  Views v;
-  for (int r = 0; r < b.rows; ++r) {
-    for (int c = 0; c < b.cols; ++c) {
-      const Eigen::Vector3d X = s.R * b.corner(r, c) + s.t;
-      v.truth.push_back(X);
-      v.left.push_back(*rig.left.project(X));
-      v.right.push_back(*rig.right.project(rig.R * X + rig.T));
-      if (rng) {
-        v.left.back() += Eigen::Vector2d(n(*rng), n(*rng));
-        v.right.back() += Eigen::Vector2d(n(*rng), n(*rng));
-      }
-    }
-  }
-  return v;
-}
-
 std::vector<DivisionRig> both_variants() {
   const StereoRig rig = rig_d3();
   return {make_division_rig(rig, DivisionVariant::image_centre, -7.9e-6, -7.2e-6),

@@ -8,10 +8,10 @@
 #include <cstdio>
 
 #include "division_scene.hpp"
+#include "naneye/recon/geometry/metrics.hpp"
 #include "naneye/recon/paper/division_fit.hpp"
 #include "naneye/recon/paper/division_homography.hpp"
 #include "naneye/recon/paper/division_triangulation.hpp"
-#include "naneye/recon/geometry/metrics.hpp"
 #include "naneye/recon/paper/plane_sweep.hpp"
 
 using namespace naneye::recon;

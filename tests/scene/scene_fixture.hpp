@@ -1,5 +1,7 @@
 #pragma once
 // Rendered textured scenes shared by the scene tests (one Renderer per sensor, one render per scene).
+#include <gtest/gtest.h>
+
 #include <map>
 #include <string>
 #include <utility>
@@ -8,6 +10,19 @@
 #include "naneye/sim/textured.hpp"
 
 namespace naneye::test {
+
+// Every textured preset (sim/src/textured_surface.cpp), mono and Bayer: the cases of the sparse and
+// dense tests against truth.
+inline auto every_preset() {
+  return ::testing::Combine(::testing::Values("plane", "plane-far", "sphere", "tube", "height"),
+                            ::testing::Bool());
+}
+inline std::string preset_case_name(const ::testing::TestParamInfo<std::tuple<std::string, bool>>& info) {
+  std::string n = std::get<0>(info.param);
+  for (auto& c : n)
+    if (c == '-') c = '_';
+  return n + (std::get<1>(info.param) ? "_bayer" : "_mono");
+}
 
 inline const sim::TexturedRenderer& textured_renderer(bool bayer) {
   static const sim::TexturedRenderer mono(paper_d3(), sim::SensorSettings{});

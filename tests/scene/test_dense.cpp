@@ -113,16 +113,7 @@ TEST_P(DenseScene, AgainstTruth) {
   EXPECT_LE(f.abs_rel, depth_error_bound(f, name == "tube" ? 0.12 : 0.07));
 }
 
-INSTANTIATE_TEST_SUITE_P(Presets, DenseScene,
-                         ::testing::Combine(::testing::Values("plane", "plane-far", "sphere", "tube",
-                                                              "height"),
-                                            ::testing::Bool()),
-                         [](const auto& info) {
-                           std::string n = std::get<0>(info.param);
-                           for (auto& c : n)
-                             if (c == '-') c = '_';
-                           return n + (std::get<1>(info.param) ? "_bayer" : "_mono");
-                         });
+INSTANTIATE_TEST_SUITE_P(Presets, DenseScene, test::every_preset(), test::preset_case_name);
 
 // Decisions from the pair's own statistics, not from this simulator's defaults: the same honesty
 // under other imaging, paired changes (a render costs ~0.2 s): darker and weaker texture; more blur

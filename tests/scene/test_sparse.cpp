@@ -71,16 +71,7 @@ TEST_P(SparseScene, AgainstTruth) {
   EXPECT_LE(f.z_rms, 1.4);
 }
 
-INSTANTIATE_TEST_SUITE_P(Presets, SparseScene,
-                         ::testing::Combine(::testing::Values("plane", "plane-far", "sphere", "tube",
-                                                              "height"),
-                                            ::testing::Bool()),
-                         [](const auto& info) {
-                           std::string n = std::get<0>(info.param);
-                           for (auto& c : n)
-                             if (c == '-') c = '_';
-                           return n + (std::get<1>(info.param) ? "_bayer" : "_mono");
-                         });
+INSTANTIATE_TEST_SUITE_P(Presets, SparseScene, test::every_preset(), test::preset_case_name);
 
 }  // namespace
 }  // namespace naneye

@@ -75,7 +75,7 @@ TEST(Render, IdealRenderPutsEveryCornerWhereTheModelProjectsIt) {
     double worst = 0;
     for (int trial = 0; trial < 6; ++trial) {
       const Pose sampled = sample_full_pose(rig, scene.board, ps, rng);
-      const int k = static_cast<int>(rng() % scene.board.inner_count());
+      const int k = static_cast<int>(rng() % scene.board.count());
       const Eye eye = trial % 2 == 0 ? Eye::left : Eye::right;
       const Truth t0 = compute_truth(rig, scene.board, sampled);
       const Eigen::Vector2d px0 = eye == Eye::left ? t0.left_px[k] : t0.right_px[k];

@@ -34,9 +34,7 @@ bool ids_reversed(const recon::PairResult& r, const std::vector<Eigen::Vector2d>
 // The OpenCV user path on the same pair, its ids matched to the truth's the same way.
 void run_opencv(const Dataset& d, const cv::Mat& left, const cv::Mat& right, View& v) {
   recon::OpenCvPathOptions o;
-  o.rows = d.board.rows;
-  o.cols = d.board.cols;
-  o.square_mm = d.board.square_mm;
+  o.board = d.board;
   const recon::OpenCvPathResult r =
       recon::opencv_reconstruct_pair(d.rig, sim::raw_view(left), sim::raw_view(right), o);
   const std::size_t n = v.truth_left.size();
@@ -65,16 +63,12 @@ Dataset render_dataset(const sim::Preset& preset, int views, std::uint64_t seed)
   d.preset = preset;
   d.rig = recon::load_rig(sim::find_calibration(preset.calib_file));
   const sim::SceneSettings scene = sim::preset_scene(preset);
-  d.board.rows = scene.board.inner_rows();
-  d.board.cols = scene.board.inner_cols();
-  d.board.square_mm = scene.board.square_mm;
-  const int n = scene.board.inner_count();
+  d.board = scene.board;
+  const int n = scene.board.count();
 
   const sim::Renderer renderer(d.rig, scene, sim::SensorSettings{});
   recon::StereoReconstructorSettings rs;
-  rs.corners.rows = d.board.rows;
-  rs.corners.cols = d.board.cols;
-  rs.reconstruction.board = d.board;
+  rs.corners.board = d.board;
   rs.tracking = false;  // every view is a separate photograph, as the paper's
   recon::StereoReconstructor reconstructor(d.rig, rs);
   auto result = std::make_unique<recon::PairResult>();

@@ -38,7 +38,7 @@ struct CaptureSummary {
 
 CaptureSummary write_capture(const CaptureOptions& o);
 
-// One pair's truth entry, keys as in issue 4 (plus the extras documented in docs/simulator.md).
+// One pair's truth entry, keys as docs/simulator.md lists them.
 nlohmann::json truth_json(const Truth& t, int pair, std::int64_t t_left_ns, std::int64_t t_right_ns);
 
 }  // namespace naneye::sim

@@ -4,26 +4,13 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "naneye/recon/geometry/board.hpp"
+
 namespace naneye::sim {
 
-// A board of square_rows x square_cols squares (the paper's 9 x 7 board, held landscape: 7 rows of
-// 9 squares), so (square_rows - 1) x (square_cols - 1) inner corners. Board coordinates: origin at
-// the first inner corner (top-left), u along a row of corners (columns), v down the columns (rows),
-// z = 0 on the board; inner corner (i, j) sits at (j s, i s, 0), as OpenCV's object points.
-struct BoardGeometry {
-  int square_rows = 7;
-  int square_cols = 9;
-  double square_mm = 5.99;
-  double border_squares = 0.5;  // white margin around the squares, in squares
-
-  int inner_rows() const { return square_rows - 1; }
-  int inner_cols() const { return square_cols - 1; }
-  int inner_count() const { return inner_rows() * inner_cols(); }
-  // Inner corner k (row-major over the inner grid) in board coordinates.
-  Eigen::Vector3d corner(int k) const;
-  // The centre of the inner grid in board coordinates.
-  Eigen::Vector3d centre() const;
-};
+// The board is recon's (naneye/recon/geometry/board.hpp: the paper's 9 x 7 squares, 6 x 8 inner
+// corners, as OpenCV's object points); the renderer adds only its white margin.
+using recon::BoardGeometry;
 
 // Board pose: X_left_camera = R X_board + t (mm).
 struct Pose {
@@ -33,6 +20,7 @@ struct Pose {
 
 struct SceneSettings {
   BoardGeometry board;
+  double border_squares = 0.5;  // white margin around the squares, in squares
   // Reflectances relative to the white squares (printed matte board) and the background radiance
   // relative to a white square facing the camera at light_reference_mm.
   double white = 1.0;

@@ -1,5 +1,5 @@
 #pragma once
-// Textured scenes with analytic ground truth (issue 14): a plane, a sphere, a tube seen from inside
+// Textured scenes with analytic ground truth: a plane, a sphere, a tube seen from inside
 // and a height field, covered with a band-limited, non-periodic solid texture, lit by a point light
 // at the camera (cos(incidence) / d^2), rendered through the exact rig model (recon::CameraModel)
 // to raw left/right frames. Truth: the left camera's per-pixel depth where both eyes see the surface.

@@ -1,5 +1,5 @@
 #pragma once
-// Stereo calibration from checkerboard views (issue 7): both cameras' intrinsics (the paper's
+// Stereo calibration from checkerboard views: both cameras' intrinsics (the paper's
 // polynomial model, Dias et al. ICDSC 2016 Eq. 3-6, through our CameraModel), the stereo pose and every
 // board pose, estimated together by one Levenberg-Marquardt bundle on the raw-pixel reprojection
 // error, with first-order standard deviations. docs/calibration.md describes the model, the

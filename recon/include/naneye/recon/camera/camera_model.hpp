@@ -15,6 +15,8 @@ namespace naneye::recon {
 struct Distortion {
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
   bool has_tangential() const { return p1 != 0.0 || p2 != 0.0; }
+  // OpenCV's order (k1, k2, p1, p2, k3): the distCoeffs of calib3d and of calibration files.
+  Eigen::Matrix<double, 1, 5> opencv_order() const { return {k1, k2, p1, p2, k3}; }
 };
 
 enum class UndistortStatus {

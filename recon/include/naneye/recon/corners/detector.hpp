@@ -1,5 +1,5 @@
 #pragma once
-// Checkerboard inner-corner detection on raw NanEye frames (issue #5): a coarse grid (tracked from
+// Checkerboard inner-corner detection on raw NanEye frames: a coarse grid (tracked from
 // the previous frame, or a full search), then a sub-pixel fit of every corner with a blurred-saddle
 // model whose edges are straight in undistorted coordinates (corners/refine.hpp), then validation
 // of the whole grid. Positions are raw (distorted) pixels, pixel centres at integers as in OpenCV.
@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "naneye/recon/camera/camera_model.hpp"
+#include "naneye/recon/geometry/board.hpp"
 #include "naneye/recon/corners/coarse_grid.hpp"
 #include "naneye/recon/corners/fast_fit.hpp"
 #include "naneye/recon/corners/noise.hpp"
@@ -90,7 +91,7 @@ struct CornerRejection {
 };
 
 struct CornerSettings {
-  int rows = 6, cols = 8;  // inner corners of the paper's 9 x 7 squares board (7 x 9 held landscape)
+  BoardGeometry board;  // the pattern looked for (its inner corners; square_mm is not used here)
   // Fit window radius (pixels, Chebyshev): a fraction of the local corner spacing, within bounds.
   double window_fraction = 0.55;
   double min_radius = 2.5, max_radius = 7.0;  // max_radius <= 8 (fit_saddle's work space)

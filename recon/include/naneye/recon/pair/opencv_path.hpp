@@ -1,5 +1,5 @@
 #pragma once
-// The reconstruction a competent OpenCV user would write for this rig (issue #5's reference path):
+// The reconstruction a competent OpenCV user would write for this rig (the reference our figures are compared with):
 // findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE) + cornerSubPix on each eye's luminance,
 // cv::undistortPoints with each camera's K and D (default criteria: 5 fixed-point iterations), and
 // cv::triangulatePoints with P1 = [I|0], P2 = [R|T] on the normalized coordinates. Benchmarks and
@@ -17,19 +17,26 @@
 //    identical, so this is reliable here). The pair's numbering is then turned as a whole to our
 //    CornerDetector's convention (canonical_order), so that ids compare with ours and the truth.
 #include <Eigen/Core>
+#include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
 #include <vector>
 
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::recon {
 
 struct OpenCvPathOptions {
-  int rows = 6, cols = 8;  // inner corners
-  double square_mm = 5.99;
+  BoardGeometry board;
   int subpix_half_window = 3;  // cornerSubPix winSize = (h, h): a (2h+1) x (2h+1) window
 };
+
+// The rig as OpenCV's calib3d takes it (CV_64F): camera matrices, distCoeffs in OpenCV's order,
+// X_right = R X_left + T.
+struct OpenCvRig {
+  cv::Mat K1, D1, K2, D2, R, T;
+};
+OpenCvRig opencv_rig(const StereoRig& rig);
 
 struct OpenCvPathResult {
   bool found = false;  // both eyes found the whole grid

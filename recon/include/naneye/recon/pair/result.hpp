@@ -1,6 +1,6 @@
 #pragma once
 // The result of reconstructing one stereo pair: the object `naneye recon --json` prints and the
-// daemon serves at /v1/depth (issue #5's contract). Preallocated and reused: a result holds at most
+// daemon serves at /v1/depth (docs/http-api.md). Preallocated and reused: a result holds at most
 // kMaxCorners points so that producing one allocates nothing per frame.
 #include <Eigen/Core>
 #include <array>

@@ -1,5 +1,5 @@
 #pragma once
-// The whole per-pair path of issue #5 for a stream of raw stereo frames: detect the board in both eyes
+// The whole per-pair path for a stream of raw stereo frames: detect the board in both eyes
 // (tracked from the previous pair when possible), make the corner ids agree between the eyes, then
 // reconstruct_pair(). Keeps the state a stream needs (previous detections); allocates nothing per pair
 // once warmed up (the full search is our own; only its opt-in OpenCV fallback would allocate).

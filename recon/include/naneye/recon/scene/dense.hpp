@@ -1,5 +1,5 @@
 #pragma once
-// Dense scene depth on the left raw pixel grid (issue 14, docs/scene.md). The contract the daemon
+// Dense scene depth on the left raw pixel grid (docs/scene.md). The contract the daemon
 // and the CLI build on; the method lives in recon/scene/dense*.cpp:
 // - every pixel of the left raw grid gets a depth Z (mm, left camera frame) and its 1-sigma, or NaN
 //   in both where the result is not trusted (no texture, occluded, left-right inconsistent, outside

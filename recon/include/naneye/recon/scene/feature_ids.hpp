@@ -1,5 +1,5 @@
 #pragma once
-// Stable ids for scene features across pairs (issue 14: "a stable id per feature tracked across
+// Stable ids for scene features across pairs ("a stable id per feature tracked across
 // frames so a client can follow a point"). Features are detected afresh in every left frame (at
 // pixel centres, one per grid cell), so a feature keeps an id only when it is shown to be the same
 // scene point as a feature of the previous pair, in two passes:

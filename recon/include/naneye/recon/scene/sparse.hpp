@@ -1,5 +1,5 @@
 #pragma once
-// Sparse scene reconstruction (issue 14, docs/scene.md): Shi-Tomasi features spread over the left
+// Sparse scene reconstruction (docs/scene.md): Shi-Tomasi features spread over the left
 // raw frame, matched along the exact model's epipolar curve in the right raw frame (ZNCC), refined
 // on the raw pixels by affine inverse-compositional LK, checked right-to-left, triangulated with
 // niter2 + reprojection refinement (triangulation.hpp), each with the depth sigma its own match
