@@ -1,16 +1,14 @@
 // `naneye`: the project's command-line tools. Each subcommand prints a clear error and exits
 // non-zero on bad input; JSON output goes to stdout, logs to stderr.
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
-
 #include <exception>
 #include <iostream>
 
 #include "commands.hpp"
+#include "naneye/base/log.hpp"
 
 int main(int argc, char** argv) {
   // Logs go to stderr so that stdout stays machine-readable (JSON lines).
-  spdlog::set_default_logger(spdlog::stderr_color_mt("cli"));
+  naneye::base::program_logger("cli");
   CLI::App app{"naneye: NanEye Stereo capture, replay and 3D reconstruction tools"};
   app.require_subcommand(1);
   naneye::tools::add_calib_commands(app);

@@ -1,4 +1,5 @@
 #include "naneye/daemon/depth_at.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,24 +7,19 @@
 
 namespace naneye::daemon {
 
+namespace {
+constexpr base::EnumTable<DepthAtStatus, 7> kDepthAtStatusNames{
+    {{DepthAtStatus::ok, "ok"},
+     {DepthAtStatus::no_board, "no_board"},
+     {DepthAtStatus::outside_model, "outside_model"},
+     {DepthAtStatus::no_convergence, "no_convergence"},
+     {DepthAtStatus::parallel, "parallel"},
+     {DepthAtStatus::behind_camera, "behind_camera"},
+     {DepthAtStatus::off_board, "off_board"}}};
+}  // namespace
+
 const char* to_string(DepthAtStatus s) {
-  switch (s) {
-    case DepthAtStatus::ok:
-      return "ok";
-    case DepthAtStatus::no_board:
-      return "no_board";
-    case DepthAtStatus::outside_model:
-      return "outside_model";
-    case DepthAtStatus::no_convergence:
-      return "no_convergence";
-    case DepthAtStatus::parallel:
-      return "parallel";
-    case DepthAtStatus::behind_camera:
-      return "behind_camera";
-    case DepthAtStatus::off_board:
-      return "off_board";
-  }
-  return "unknown";
+  return base::enum_name(kDepthAtStatusNames, s);
 }
 
 DepthAt depth_at(const recon::CameraModel& left, const recon::PairResult& result, const Eigen::Vector2d& px) {

@@ -14,7 +14,7 @@ driver::SourceRegistry make_source_registry() {
   return registry;
 }
 
-SourceFactory driver_source_factory() {
+SourceOpener driver_source_factory() {
   auto registry = std::make_shared<driver::SourceRegistry>(make_source_registry());
   return [registry](const std::string& uri) { return registry->open(uri); };
 }

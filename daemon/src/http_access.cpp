@@ -1,6 +1,7 @@
 #include "http_access.hpp"
 
 #include "http_transport.hpp"
+#include "log.hpp"
 
 #include <arpa/inet.h>
 #include <openssl/crypto.h>
@@ -49,8 +50,7 @@ std::string read_token(const std::filesystem::path& file) {
                              " characters without spaces (e.g. openssl rand -hex 32)");
   struct stat st {};
   if (::stat(file.c_str(), &st) == 0 && (st.st_mode & S_IROTH)) {
-    if (auto log = spdlog::get("daemon"))
-      log->warn("http.token_file {} is readable by every user (mode {:o}): chmod 0640", file.string(),
+    log()->warn("http.token_file {} is readable by every user (mode {:o}): chmod 0640", file.string(),
                 st.st_mode & 0777);
   }
   return t;

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "http_internal.hpp"
+#include "naneye/base/clock.hpp"
 #include "naneye/daemon/depth_at.hpp"
 #include "naneye/daemon/result_json.hpp"
 
@@ -10,7 +11,7 @@ namespace naneye::daemon::http {
 namespace {
 
 double age_ms(const Published& p) {
-  return static_cast<double>(monotonic_ns() - p.published_ns) * 1e-6;
+  return static_cast<double>(base::monotonic_ns() - p.published_ns) * 1e-6;
 }
 
 void no_result(httplib::Response& res) {

@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "http_internal.hpp"
+#include "naneye/base/clock.hpp"
 
 namespace naneye::daemon::http {
 namespace {
@@ -45,7 +46,7 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
     }
     auto stream = std::make_shared<Stream>();
     stream->ctx = &ctx;
-    stream->last_write_ns = monotonic_ns();
+    stream->last_write_ns = base::monotonic_ns();
     // Without a resume point, start with the latest result so the client has one at once. An id
     // beyond the latest is from an earlier run of the daemon (numbers restart at 1): the same.
     const auto latest = ctx.pipeline->results().latest_seq();
@@ -64,8 +65,8 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
           }
           const auto latest = results.latest_seq();
           if (!latest || stream->cursor > *latest) {
-            if (monotonic_ns() - stream->last_write_ns >= kHeartbeatNs) {
-              stream->last_write_ns = monotonic_ns();
+            if (base::monotonic_ns() - stream->last_write_ns >= kHeartbeatNs) {
+              stream->last_write_ns = base::monotonic_ns();
               static constexpr char kBeat[] = ": keep-alive\n\n";
               return sink.write(kBeat, sizeof kBeat - 1);
             }
@@ -75,7 +76,7 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
           }
           std::string event;
           const bool held = results.read_seq(stream->cursor, [&](const Published& p) {
-            const double age = static_cast<double>(monotonic_ns() - p.published_ns) * 1e-6;
+            const double age = static_cast<double>(base::monotonic_ns() - p.published_ns) * 1e-6;
             event = "id: " + std::to_string(p.seq) + "\nevent: result\ndata: ";
             append_with_age(event, age, *result_json_text(c, p));
             event += "\n\n";
@@ -92,7 +93,7 @@ void add_event_routes(httplib::Server& svr, HttpContext& ctx) {
             return true;
           }
           ++stream->cursor;
-          stream->last_write_ns = monotonic_ns();
+          stream->last_write_ns = base::monotonic_ns();
           c.sse_events.fetch_add(1, std::memory_order_relaxed);
           return sink.write(event.data(), event.size());
         },

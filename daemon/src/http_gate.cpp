@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "log.hpp"
 #include "naneye/daemon/http_server.hpp"
 
 namespace naneye::daemon::http {
@@ -24,11 +25,6 @@ using Clock = std::chrono::steady_clock;
 // (eventfds, pipes). The daemon uses ~30 at rest; 64 leaves room for the source to reopen its
 // file while every client slot is taken (it failed for 25 s once descriptors ran out).
 constexpr int kReservedFds = 64;
-
-std::shared_ptr<spdlog::logger> log() {
-  auto l = spdlog::get("daemon");
-  return l ? l : spdlog::default_logger();
-}
 
 int descriptor_budget(int wanted) {
   rlimit rl{};

@@ -14,6 +14,7 @@
 #include "http_gated_server.hpp"
 #include "http_internal.hpp"
 #include "http_transport.hpp"
+#include "log.hpp"
 #include "naneye/daemon/result_json.hpp"
 
 namespace naneye::daemon {
@@ -159,8 +160,8 @@ void lower_this_thread_priority() {
 
 // Said at every start, loudly, because the unit's IPAddressAllow is the only other guard.
 void warn_about_access(const Settings& s, const Access& access) {
-  auto log = spdlog::get("daemon");
-  if (!log || access.loopback_bind()) return;
+  if (access.loopback_bind()) return;
+  const auto log = daemon::log();
   if (!access.token_required()) {
     log->warn(
         "!!! http: serving {} beyond loopback WITHOUT A TOKEN: anyone who can reach port {} reads the "
@@ -255,7 +256,7 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
             what = e.what();
           } catch (...) {
           }
-          if (auto log = spdlog::get("daemon")) log->error("handler for {} failed: {}", req.path, what);
+          log()->error("handler for {} failed: {}", req.path, what);
           http::send_error(res, 500, "internal_error", what);
         } catch (...) {
           http::send_fallback_error(res);

@@ -4,7 +4,6 @@
 // takes them synchronously with sigtimedwait (no work in signal handlers), and it feeds the systemd
 // watchdog only while the pipeline makes progress or waits for its device.
 #include <signal.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
 
@@ -12,6 +11,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "log.hpp"
 #include "naneye/daemon/config_check.hpp"
 #include "naneye/daemon/http_server.hpp"
 #include "naneye/daemon/pipeline.hpp"
@@ -65,7 +65,7 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
     timespec ts{0, static_cast<long>(std::chrono::nanoseconds(tick).count())};
     const int sig = sigtimedwait(&set, nullptr, &ts);
     if (sig == SIGTERM || sig == SIGINT) {
-      spdlog::get("daemon")->info("{}: stopping", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+      daemon::log()->info("{}: stopping", sig == SIGTERM ? "SIGTERM" : "SIGINT");
       return;
     }
     if (sig == SIGHUP) {
@@ -85,7 +85,7 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
         why = e.what();
       }
       if (!why.empty()) {
-        spdlog::get("daemon")->error("SIGHUP: calibration not reloaded, keeping the current one: {}", why);
+        daemon::log()->error("SIGHUP: calibration not reloaded, keeping the current one: {}", why);
         pipeline.reload_refused(why);
       }
       sd_notify(0, "READY=1");
@@ -119,8 +119,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   f.config_given = app.count("--config") > 0;
 
-  auto logger = spdlog::stderr_color_mt("daemon");
-  spdlog::set_default_logger(logger);
+  const auto logger = base::program_logger("daemon");
   daemon::Settings settings;
   std::shared_ptr<const recon::StereoRig> rig;
   try {

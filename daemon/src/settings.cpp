@@ -1,4 +1,5 @@
 #include "naneye/daemon/settings.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <spdlog/common.h>
 
@@ -10,6 +11,9 @@
 
 namespace naneye::daemon {
 namespace {
+
+constexpr base::EnumTable<ReconMode, 3> kReconModeNames{
+    {{ReconMode::board, "board"}, {ReconMode::scene, "scene"}, {ReconMode::both, "both"}}};
 
 std::string type_name(const toml::node& n) {
   std::ostringstream os;
@@ -114,14 +118,10 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
       {"recon.mode",
        [&s](const toml::node& n, const std::string& k) {
          const auto v = get_string(n, k);
-         if (v == "board")
-           s.recon_mode = ReconMode::board;
-         else if (v == "scene")
-           s.recon_mode = ReconMode::scene;
-         else if (v == "both")
-           s.recon_mode = ReconMode::both;
+         if (const auto m = base::enum_parse(kReconModeNames, v))
+           s.recon_mode = *m;
          else
-           fail(k, "expected one of board, scene, both, got \"" + v + "\"");
+           fail(k, "expected one of " + base::enum_names(kReconModeNames) + ", got \"" + v + "\"");
        }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
@@ -158,15 +158,7 @@ void apply(const toml::table& table, const std::string& prefix, std::map<std::st
 }  // namespace
 
 const char* to_string(ReconMode m) {
-  switch (m) {
-    case ReconMode::board:
-      return "board";
-    case ReconMode::scene:
-      return "scene";
-    case ReconMode::both:
-      return "both";
-  }
-  return "unknown";
+  return base::enum_name(kReconModeNames, m);
 }
 
 Settings parse_settings(const std::string& toml_text, const std::filesystem::path& base_dir) {

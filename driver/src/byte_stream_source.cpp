@@ -1,8 +1,7 @@
 #include "naneye/driver/byte_stream_source.hpp"
 
-#include <time.h>
-
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
 
 namespace naneye::driver {
 
@@ -39,7 +38,6 @@ class ByteStreamSource::TimingSink : public FrameSink {
     return f;
   }
   void commit_frame(Frame& f) override {
-    s_.last_sensor_ns_ = f.sensor_ns;
     s_.records_.fetch_add(1, std::memory_order_relaxed);
     s_.pairer_->commit_frame(f);
   }
@@ -51,7 +49,6 @@ class ByteStreamSource::TimingSink : public FrameSink {
 
 ByteStreamSource::ByteStreamSource(SourceInfo info, StreamSettings settings)
     : info_(std::move(info)),
-      settings_(settings),
       pool_(settings.ring_capacity + settings.consumer_hold + 2 * settings.pairer.max_pending + 1),
       ring_(settings.ring_capacity, info_.live ? PairRing::Policy::drop_oldest : PairRing::Policy::block,
             pool_.deleter()),
@@ -69,12 +66,6 @@ ByteStreamSource::~ByteStreamSource() {
   }
   // Buffers still waiting in the pairer go back before the pool is destroyed.
   pairer_->flush();
-}
-
-std::int64_t ByteStreamSource::monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
 void ByteStreamSource::start() {
@@ -96,7 +87,7 @@ void ByteStreamSource::thread_main() {
     run();
   } catch (const std::exception& e) {
     log()->error("{}: capture failed: {}", info_.uri, e.what());
-    end_of_stream(monotonic_ns());
+    end_of_stream(base::monotonic_ns());
     fail(e.what());
   }
   if (stopping() && state() != SourceState::failed)

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
 #include "naneye/driver/neyd.hpp"
 #include "naneye/driver/source_registry.hpp"
 
@@ -59,7 +60,7 @@ bool FileSource::play_raw() {
     f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
     const auto n = static_cast<std::size_t>(f.gcount());
     if (n == 0) break;
-    feed(std::span(buf).first(n), monotonic_ns());  // paced per record in on_record_start()
+    feed(std::span(buf).first(n), base::monotonic_ns());  // paced per record in on_record_start()
   }
   return !stopping();
 }
@@ -70,7 +71,7 @@ bool FileSource::play_neyd() {
   std::int64_t t = 0;
   while (!stopping() && reader.next(data, t)) {
     if (!pace(t)) return false;
-    feed(data, monotonic_ns());
+    feed(data, base::monotonic_ns());
   }
   return !stopping();
 }
@@ -87,13 +88,13 @@ void FileSource::run() {
     try {
       if (!(neyd_ ? play_neyd() : play_raw())) return;
     } catch (const NeydError& e) {
-      end_of_stream(monotonic_ns());
+      end_of_stream(base::monotonic_ns());
       log()->warn("{}", e.what());
       fail(e.what());
       return;
     }
     const bool again = options_.loop && records_committed() != before;  // an empty pass would spin
-    end_of_stream(monotonic_ns(), again);
+    end_of_stream(base::monotonic_ns(), again);
     if (!again) return;
   }
 }

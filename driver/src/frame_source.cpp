@@ -1,25 +1,21 @@
 #include "naneye/driver/frame_source.hpp"
+#include "naneye/base/enum_table.hpp"
 
 namespace naneye::driver {
 
+namespace {
+constexpr base::EnumTable<SourceState, 7> kSourceStateNames{
+    {{SourceState::starting, "starting"},
+     {SourceState::streaming, "streaming"},
+     {SourceState::waiting_for_device, "waiting_for_device"},
+     {SourceState::stalled, "stalled"},
+     {SourceState::finished, "finished"},
+     {SourceState::failed, "failed"},
+     {SourceState::stopped, "stopped"}}};
+}  // namespace
+
 const char* to_string(SourceState s) {
-  switch (s) {
-    case SourceState::starting:
-      return "starting";
-    case SourceState::streaming:
-      return "streaming";
-    case SourceState::waiting_for_device:
-      return "waiting_for_device";
-    case SourceState::stalled:
-      return "stalled";
-    case SourceState::finished:
-      return "finished";
-    case SourceState::failed:
-      return "failed";
-    case SourceState::stopped:
-      return "stopped";
-  }
-  return "unknown";
+  return base::enum_name(kSourceStateNames, s);
 }
 
 bool has_ended(SourceState s) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
 
 namespace naneye::driver {
 namespace {
@@ -159,7 +160,7 @@ bool ImageSource::play_pass(std::vector<std::uint8_t>& record) {
       const RecordHeader h{seq_++, eye == 0 ? Sensor::left : Sensor::right, ticks};
       encode_record(h, std::span<const std::uint16_t, kPixelCount>(eyes[eye].data(), kPixelCount),
                     std::span<std::uint8_t, kRecordSize>(record.data(), kRecordSize));
-      feed(record, monotonic_ns());
+      feed(record, base::monotonic_ns());
     }
     ++pair_clock_;
     ++fed;
@@ -183,7 +184,7 @@ void ImageSource::run() {
   do {
     if (!play_pass(record)) return;
   } while (options_.loop && !stopping());
-  end_of_stream(monotonic_ns());
+  end_of_stream(base::monotonic_ns());
 }
 
 void register_image_source(SourceRegistry& registry) {

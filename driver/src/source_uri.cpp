@@ -1,4 +1,5 @@
 #include "naneye/driver/source_uri.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -135,14 +136,20 @@ SourceUri parse_uri(std::string_view text) {
   return u;
 }
 
+namespace {
+// `color=`: "bayer" is an alias of "grbg".
+constexpr base::EnumTable<ColorMode, 3> kColorNames{
+    {{ColorMode::mono, "mono"}, {ColorMode::bayer_grbg, "grbg"}, {ColorMode::bayer_grbg, "bayer"}}};
+constexpr base::EnumTable<FileUri::Speed, 2> kSpeedNames{
+    {{FileUri::Speed::realtime, "realtime"}, {FileUri::Speed::max, "max"}}};
+}  // namespace
+
 StreamSettings parse_stream_params(const SourceUri& uri, StreamSettings s) {
   if (auto v = uri.param("color")) {
-    if (*v == "mono")
-      s.parser.color = ColorMode::mono;
-    else if (*v == "grbg" || *v == "bayer")
-      s.parser.color = ColorMode::bayer_grbg;
+    if (const auto c = base::enum_parse(kColorNames, *v))
+      s.parser.color = *c;
     else
-      bad_value(uri, "color", *v, "mono, grbg");
+      bad_value(uri, "color", *v, base::enum_names(kColorNames));
   }
   if (auto v = uri.param("tolerance_ms")) {
     const auto ms = parse_double(*v);
@@ -198,30 +205,25 @@ UsbUri parse_usb_uri(const SourceUri& uri) {
   return u;
 }
 
+namespace {
+constexpr base::EnumTable<V4l2Layout, 3> kV4l2LayoutNames{{{V4l2Layout::side_by_side, "side-by-side"},
+                                                           {V4l2Layout::top_bottom, "top-bottom"},
+                                                           {V4l2Layout::alternate, "alternate"}}};
+}  // namespace
+
 const char* to_string(V4l2Layout l) {
-  switch (l) {
-    case V4l2Layout::side_by_side:
-      return "side-by-side";
-    case V4l2Layout::top_bottom:
-      return "top-bottom";
-    case V4l2Layout::alternate:
-      return "alternate";
-  }
-  return "?";
+  return base::enum_name(kV4l2LayoutNames, l, "?");
 }
 
+namespace {
+constexpr base::EnumTable<V4l2Format, 4> kV4l2FormatNames{{{V4l2Format::y10, "Y10"},
+                                                           {V4l2Format::y16, "Y16"},
+                                                           {V4l2Format::grey, "GREY"},
+                                                           {V4l2Format::sgrbg10, "SGRBG10"}}};
+}  // namespace
+
 const char* to_string(V4l2Format f) {
-  switch (f) {
-    case V4l2Format::y10:
-      return "Y10";
-    case V4l2Format::y16:
-      return "Y16";
-    case V4l2Format::grey:
-      return "GREY";
-    case V4l2Format::sgrbg10:
-      return "SGRBG10";
-  }
-  return "?";
+  return base::enum_name(kV4l2FormatNames, f, "?");
 }
 
 V4l2Uri parse_v4l2_uri(const SourceUri& uri) {
@@ -232,15 +234,14 @@ V4l2Uri parse_v4l2_uri(const SourceUri& uri) {
     throw SourceError("v4l2://: bad device '" + u.device +
                       "'; expected an absolute path, e.g. v4l2:///dev/video0");
   if (auto v = uri.param("layout")) {
-    bool found = false;
-    for (auto l : {V4l2Layout::side_by_side, V4l2Layout::top_bottom, V4l2Layout::alternate})
-      if (*v == to_string(l)) u.layout = l, found = true;
-    if (!found) bad_value(uri, "layout", *v, "side-by-side, top-bottom, alternate");
+    if (const auto l = base::enum_parse(kV4l2LayoutNames, *v))
+      u.layout = *l;
+    else
+      bad_value(uri, "layout", *v, base::enum_names(kV4l2LayoutNames));
   }
   if (auto v = uri.param("format")) {
-    for (auto f : {V4l2Format::y10, V4l2Format::y16, V4l2Format::grey, V4l2Format::sgrbg10})
-      if (*v == to_string(f)) u.format = f;
-    if (!u.format) bad_value(uri, "format", *v, "Y10, Y16, GREY, SGRBG10");
+    u.format = base::enum_parse(kV4l2FormatNames, *v);
+    if (!u.format) bad_value(uri, "format", *v, base::enum_names(kV4l2FormatNames));
   }
   u.stream = parse_stream_params(uri);
   // A grabber may crop or process the reference pixels: checked only when the URI says they are
@@ -256,10 +257,8 @@ FileUri parse_file_uri(const SourceUri& uri) {
   f.path = uri.target;
   if (f.path.empty()) throw SourceError("file://: no path; expected file:///path/capture.raw or .neyd");
   if (auto v = uri.param("speed")) {
-    if (*v == "realtime") {
-      f.speed = FileUri::Speed::realtime;
-    } else if (*v == "max") {
-      f.speed = FileUri::Speed::max;
+    if (const auto sp = base::enum_parse(kSpeedNames, *v)) {
+      f.speed = *sp;
     } else {
       const auto x = parse_double(*v);
       if (!x || *x <= 0 || *x > 1000)

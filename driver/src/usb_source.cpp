@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
 
 namespace naneye::driver {
 namespace {
@@ -39,7 +40,7 @@ class UsbSource final : public ByteStreamSource, private UsbTransportSink {
   }
 
   void on_bytes(std::span<const std::uint8_t> bytes, std::int64_t host_ns) override { feed(bytes, host_ns); }
-  void on_discontinuity() override { end_of_stream(monotonic_ns()); }
+  void on_discontinuity() override { end_of_stream(base::monotonic_ns()); }
   void on_state(SourceState s) override {
     if (s != SourceState::stopped && !stopping()) set_state(s);
   }

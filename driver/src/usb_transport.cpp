@@ -9,16 +9,14 @@
 #include <vector>
 
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
 #include "usb_open.hpp"
 
 namespace naneye::driver {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
+using base::monotonic_ns;
 
 }  // namespace
 
@@ -46,16 +44,16 @@ struct UsbTransport::Impl {
   bool lost = false;        // the board went away: drop it and wait for it
   bool broken = false;      // it misbehaves: close and reopen it
   bool clear_halt = false;  // the endpoint stalled
-  bool ever_connected = false;
   int consecutive_errors = 0;
   std::int64_t last_data_ns = 0;
-  std::string last_why, told_why;
-  std::atomic<std::uint64_t> bytes{0}, transfers{0}, errors{0}, reconnects{0}, stalls{0}, connects{0};
+  std::string last_why;  // why the last connection attempt failed
+  std::atomic<std::uint64_t> bytes{0}, transfers{0}, errors{0}, stalls{0};
   mutable std::mutex desc_mutex;
   std::string desc;
+  base::Backoff backoff;  // connects = its successes, reconnects = its recoveries
 
   Impl(UsbTransportSettings settings, UsbTransportSink& k, std::atomic<SourceState>& st)
-      : s(std::move(settings)), sink(k), state(st) {}
+      : s(std::move(settings)), sink(k), state(st), backoff(s.backoff, log(), "usb") {}
 
   void set_state(SourceState st) {
     if (state.exchange(st) != st) sink.on_state(st);
@@ -108,7 +106,7 @@ struct UsbTransport::Impl {
       case LIBUSB_TRANSFER_TIMED_OUT:
         consecutive_errors = 0;
         if (t->actual_length > 0) {
-          last_data_ns = now_ns();
+          last_data_ns = monotonic_ns();
           bytes += static_cast<std::uint64_t>(t->actual_length);
           ++transfers;
           if (state.load() == SourceState::stalled) set_state(SourceState::streaming);
@@ -167,22 +165,21 @@ struct UsbTransport::Impl {
     }
     handle = dev.handle;
     device = libusb_get_device(handle);
-    told_why.clear();
     lost = broken = clear_halt = false;
     consecutive_errors = 0;
     for (auto& slot : slots) submit(slot);
     if (lost || broken) {
-      drop("first submissions failed");
+      drop();
+      last_why = what + ": first submissions failed";
       return false;
     }
     {
       std::lock_guard lock(desc_mutex);
       desc = what;
     }
-    ++connects;
-    if (ever_connected) ++reconnects;
-    ever_connected = true;
-    last_data_ns = now_ns();
+    backoff.succeeded();
+    backoff.reset();
+    last_data_ns = monotonic_ns();
     log()->info("usb: streaming from {} endpoint 0x{:02x}, {} x {} B transfers", what, s.profile.endpoint,
                 slots.size(), s.profile.transfer_size);
     set_state(SourceState::streaming);
@@ -198,7 +195,8 @@ struct UsbTransport::Impl {
     if (active > 0) log()->error("usb: {} transfers did not complete after cancellation", active);
   }
 
-  void drop(const char* why) {
+  // Gives the board back; the caller says why (Backoff::lost), or is stopping.
+  void drop() {
     drain();
     sink.on_discontinuity();  // the record in flight is cut
     libusb_release_interface(handle, s.profile.interface);
@@ -209,27 +207,17 @@ struct UsbTransport::Impl {
       std::lock_guard lock(desc_mutex);
       desc.clear();
     }
-    log()->warn("usb: {}: waiting for the board", why);
   }
 
   void run() {
-    auto backoff = s.backoff_initial;
     auto next_try = Clock::now();
     while (!stopping) {
       if (!handle) {
         set_state(SourceState::waiting_for_device);
         if (arrived.exchange(false)) next_try = Clock::now();
         if (Clock::now() >= next_try) {
-          if (connect()) {
-            backoff = s.backoff_initial;
-            continue;
-          }
-          // Say why once per distinct reason (a missing board is normal; a failing bring-up is not).
-          if (last_why != told_why)
-            log()->warn("usb: {}; retrying with backoff up to {} ms", last_why, s.backoff_max.count());
-          told_why = last_why;
-          next_try = Clock::now() + backoff;
-          backoff = std::min(backoff * 2, s.backoff_max);
+          if (connect()) continue;
+          next_try = Clock::now() + backoff.failed(last_why);
         }
         const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(next_try - Clock::now());
         pump(std::clamp(wait, std::chrono::milliseconds(1), std::chrono::milliseconds(100)));
@@ -245,12 +233,12 @@ struct UsbTransport::Impl {
           if (!slot.active) submit(slot);
       }
       if (lost || broken || active == 0) {
-        const bool was_lost = lost;
-        drop(was_lost ? "board lost" : "transfers failing");
-        next_try = Clock::now() + (was_lost ? s.backoff_initial : backoff);
+        const char* why = lost ? "board lost" : "transfers failing";
+        drop();
+        next_try = Clock::now() + backoff.lost(why);
         continue;
       }
-      const auto idle = std::chrono::nanoseconds(now_ns() - last_data_ns);
+      const auto idle = std::chrono::nanoseconds(monotonic_ns() - last_data_ns);
       if (state.load() == SourceState::streaming && idle > s.stall_timeout) {
         ++stalls;
         log()->warn("usb: no data for {} ms: stalled",
@@ -258,7 +246,7 @@ struct UsbTransport::Impl {
         set_state(SourceState::stalled);
       }
     }
-    if (handle) drop("stopping");
+    if (handle) drop();
   }
 };
 
@@ -307,8 +295,8 @@ void UsbTransport::stop() {
 
 UsbTransportCounters UsbTransport::counters() const {
   const Impl& m = *impl_;
-  return {m.bytes.load(),      m.transfers.load(), m.errors.load(),
-          m.reconnects.load(), m.stalls.load(),    m.connects.load()};
+  const auto b = m.backoff.counters();
+  return {m.bytes.load(), m.transfers.load(), m.errors.load(), b.recoveries, m.stalls.load(), b.successes};
 }
 
 std::string UsbTransport::device_description() const {

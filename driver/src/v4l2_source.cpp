@@ -1,5 +1,5 @@
 // v4l2:// capture loop: dequeue, unpack into a pooled pair, hand over; on device loss close
-// everything and retry with exponential backoff until the node is back (as ustreamer does).
+// everything and reopen with base::Backoff until the node is back (as ustreamer does).
 #include "naneye/driver/v4l2_source.hpp"
 
 #include <linux/videodev2.h>
@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
 #include "naneye/driver/counters.hpp"
 #include "naneye/driver/pair_pool.hpp"
 #include "naneye/driver/pair_ring.hpp"
@@ -24,19 +25,14 @@ using v4l2_detail::Dequeued;
 using v4l2_detail::V4l2Device;
 using v4l2_detail::V4l2Error;
 
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
 class V4l2Source final : public FrameSource {
  public:
   V4l2Source(V4l2Settings s, std::string uri)
       : s_(std::move(s)),
         uri_(std::move(uri)),
         pool_(s_.pool_size),
-        ring_(s_.ring_size, PairRing::Policy::drop_oldest, pool_.deleter()) {}
+        ring_(s_.ring_size, PairRing::Policy::drop_oldest, pool_.deleter()),
+        backoff_(s_.backoff, log(), "v4l2 " + s_.device) {}
   ~V4l2Source() override { stop(); }
 
   void start() override {
@@ -53,7 +49,7 @@ class V4l2Source final : public FrameSource {
         ring_.close();
         throw SourceError(e.what());
       }
-      log()->warn("v4l2: {}: waiting for the device", e.what());
+      next_try_ = Clock::now() + backoff_.failed(e.what());
       state_ = SourceState::waiting_for_device;
     }
     thread_ = std::thread([this] { run(); });
@@ -73,6 +69,7 @@ class V4l2Source final : public FrameSource {
   SourceState state() const override { return state_.load(); }
   SourceCounters counters() const override {
     SourceCounters c = counters_.snapshot();
+    c.reconnects = backoff_.counters().recoveries;
     c.pairs_dropped += ring_.dropped();
     return c;
   }
@@ -93,7 +90,8 @@ class V4l2Source final : public FrameSource {
       std::lock_guard lock(info_mutex_);
       card_ = dev_.card();
     }
-    ever_open_ = true;
+    backoff_.succeeded();
+    backoff_.reset();
     have_first_ = false;
     have_sequence_ = false;
     last_frame_ = Clock::now();
@@ -104,24 +102,17 @@ class V4l2Source final : public FrameSource {
   }
 
   void run() {
-    auto backoff = s_.backoff_initial;
-    auto next_try = Clock::now();
     while (!stopping_) {
       if (!dev_.is_open()) {
-        if (Clock::now() < next_try) {
+        if (Clock::now() < next_try_) {
           std::this_thread::sleep_for(
-              std::min<Clock::duration>(next_try - Clock::now(), std::chrono::milliseconds(20)));
+              std::min<Clock::duration>(next_try_ - Clock::now(), std::chrono::milliseconds(20)));
           continue;
         }
         try {
-          const bool was_open = ever_open_;
           open_device();
-          if (was_open) AtomicCounters::add(counters_.reconnects);
-          backoff = s_.backoff_initial;
         } catch (const V4l2Error& e) {
-          log()->debug("v4l2: {}; next attempt in {} ms", e.what(), backoff.count());
-          next_try = Clock::now() + backoff;
-          backoff = std::min(backoff * 2, s_.backoff_max);
+          next_try_ = Clock::now() + backoff_.failed(e.what());
         }
         continue;
       }
@@ -140,15 +131,13 @@ class V4l2Source final : public FrameSource {
         dev_.requeue(d.index);
       } catch (const V4l2Error& e) {
         lose_device(e);
-        next_try = Clock::now() + s_.backoff_initial;
-        backoff = s_.backoff_initial;
       }
     }
   }
 
   void lose_device(const V4l2Error& e) {
     if (!e.device_gone()) AtomicCounters::add(counters_.transfer_errors);
-    log()->warn("v4l2: {}: waiting for the device", e.what());
+    next_try_ = Clock::now() + backoff_.lost(e.what());
     dev_.close();
     pending_.reset();  // an alternate-layout eye waiting for its partner will not get one
     state_ = SourceState::waiting_for_device;
@@ -182,7 +171,7 @@ class V4l2Source final : public FrameSource {
   }
 
   void handle(const Dequeued& d) {
-    const std::int64_t host_ns = monotonic_ns();
+    const std::int64_t host_ns = base::monotonic_ns();
     AtomicCounters::add(counters_.bytes, d.bytesused);
     if (have_sequence_ && d.sequence != last_sequence_ + 1)
       AtomicCounters::add(counters_.seq_gaps, d.sequence - last_sequence_ - 1);
@@ -269,7 +258,9 @@ class V4l2Source final : public FrameSource {
   PairPtr pending_{nullptr, PairReturn{}};
   Sensor pending_eye_ = Sensor::left;
   ColorMode color_ = ColorMode::mono;
-  bool have_first_ = false, have_sequence_ = false, ever_open_ = false;
+  bool have_first_ = false, have_sequence_ = false;
+  base::Backoff backoff_;         // reconnects = its recoveries
+  Clock::time_point next_try_{};  // capture thread (and start(), before it runs)
   std::int64_t first_ns_ = 0;
   std::uint32_t last_sequence_ = 0;
   std::uint64_t delivered_ = 0;

@@ -1,4 +1,5 @@
 #include "naneye/recon/camera/camera_model.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -8,16 +9,15 @@
 
 namespace naneye::recon {
 
+namespace {
+constexpr base::EnumTable<UndistortStatus, 3> kUndistortStatusNames{
+    {{UndistortStatus::ok, "ok"},
+     {UndistortStatus::outside_model, "outside_model"},
+     {UndistortStatus::no_convergence, "no_convergence"}}};
+}  // namespace
+
 const char* to_string(UndistortStatus s) {
-  switch (s) {
-    case UndistortStatus::ok:
-      return "ok";
-    case UndistortStatus::outside_model:
-      return "outside_model";
-    case UndistortStatus::no_convergence:
-      return "no_convergence";
-  }
-  return "unknown";
+  return base::enum_name(kUndistortStatusNames, s);
 }
 
 std::optional<double> radial_fold_radius(double k1, double k2, double k3) {

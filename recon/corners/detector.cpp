@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "naneye/base/enum_table.hpp"
 #include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/corners/grid.hpp"
-#include "plane.hpp"
 #include "naneye/recon/corners/refine.hpp"
+#include "plane.hpp"
 
 namespace naneye::recon {
 
@@ -30,28 +31,21 @@ void renumber(CornerResult& r) {
 }
 }  // namespace
 
+namespace {
+constexpr base::EnumTable<CornerFailure, 9> kCornerFailureNames{
+    {{CornerFailure::none, "none"},
+     {CornerFailure::bad_input, "bad_input"},
+     {CornerFailure::no_grid, "no_grid"},
+     {CornerFailure::fit_failed, "fit_failed"},
+     {CornerFailure::fit_rejected, "fit_rejected"},
+     {CornerFailure::low_contrast, "low_contrast"},
+     {CornerFailure::polarity, "polarity"},
+     {CornerFailure::not_planar, "not_planar"},
+     {CornerFailure::track_moved, "track_moved"}}};
+}  // namespace
+
 const char* to_string(CornerFailure f) {
-  switch (f) {
-    case CornerFailure::none:
-      return "none";
-    case CornerFailure::bad_input:
-      return "bad_input";
-    case CornerFailure::no_grid:
-      return "no_grid";
-    case CornerFailure::fit_failed:
-      return "fit_failed";
-    case CornerFailure::fit_rejected:
-      return "fit_rejected";
-    case CornerFailure::low_contrast:
-      return "low_contrast";
-    case CornerFailure::polarity:
-      return "polarity";
-    case CornerFailure::not_planar:
-      return "not_planar";
-    case CornerFailure::track_moved:
-      return "track_moved";
-  }
-  return "unknown";
+  return base::enum_name(kCornerFailureNames, f);
 }
 
 void canonical_order(CornerResult& r) {

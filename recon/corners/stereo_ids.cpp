@@ -1,4 +1,5 @@
 #include "naneye/recon/corners/stereo_ids.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -6,18 +7,16 @@
 
 namespace naneye::recon {
 
+namespace {
+constexpr base::EnumTable<StereoIdStatus, 4> kStereoIdStatusNames{
+    {{StereoIdStatus::consistent, "consistent"},
+     {StereoIdStatus::flipped_right, "flipped_right"},
+     {StereoIdStatus::ambiguous, "ambiguous"},
+     {StereoIdStatus::not_found, "not_found"}}};
+}  // namespace
+
 const char* to_string(StereoIdStatus s) {
-  switch (s) {
-    case StereoIdStatus::consistent:
-      return "consistent";
-    case StereoIdStatus::flipped_right:
-      return "flipped_right";
-    case StereoIdStatus::ambiguous:
-      return "ambiguous";
-    case StereoIdStatus::not_found:
-      return "not_found";
-  }
-  return "unknown";
+  return base::enum_name(kStereoIdStatusNames, s);
 }
 
 void turn_numbering(CornerResult& r) {

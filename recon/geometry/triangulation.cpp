@@ -1,4 +1,5 @@
 #include "naneye/recon/geometry/triangulation.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -29,34 +30,29 @@ Eigen::Matrix<double, 2, 3> pixel_jacobian(const CameraModel& cam, const Eigen::
 
 }  // namespace
 
+namespace {
+constexpr base::EnumTable<TriangulationMethod, 4> kTriangulationMethodNames{
+    {{TriangulationMethod::dlt, "dlt"},
+     {TriangulationMethod::midpoint, "midpoint"},
+     {TriangulationMethod::niter2, "niter2"},
+     {TriangulationMethod::refined, "refined"}}};
+}  // namespace
+
 const char* to_string(TriangulationMethod m) {
-  switch (m) {
-    case TriangulationMethod::dlt:
-      return "dlt";
-    case TriangulationMethod::midpoint:
-      return "midpoint";
-    case TriangulationMethod::niter2:
-      return "niter2";
-    case TriangulationMethod::refined:
-      return "refined";
-  }
-  return "unknown";
+  return base::enum_name(kTriangulationMethodNames, m);
 }
 
+namespace {
+constexpr base::EnumTable<TriangulationStatus, 5> kTriangulationStatusNames{
+    {{TriangulationStatus::ok, "ok"},
+     {TriangulationStatus::left_pixel_invalid, "left_pixel_invalid"},
+     {TriangulationStatus::right_pixel_invalid, "right_pixel_invalid"},
+     {TriangulationStatus::parallel_rays, "parallel_rays"},
+     {TriangulationStatus::behind_camera, "behind_camera"}}};
+}  // namespace
+
 const char* to_string(TriangulationStatus s) {
-  switch (s) {
-    case TriangulationStatus::ok:
-      return "ok";
-    case TriangulationStatus::left_pixel_invalid:
-      return "left_pixel_invalid";
-    case TriangulationStatus::right_pixel_invalid:
-      return "right_pixel_invalid";
-    case TriangulationStatus::parallel_rays:
-      return "parallel_rays";
-    case TriangulationStatus::behind_camera:
-      return "behind_camera";
-  }
-  return "unknown";
+  return base::enum_name(kTriangulationStatusNames, s);
 }
 
 Eigen::Vector3d triangulate_dlt(const StereoRig& rig, const Eigen::Vector2d& xl, const Eigen::Vector2d& xr) {

@@ -1,23 +1,20 @@
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <span>
 
 namespace naneye::recon {
 
+namespace {
+constexpr base::EnumTable<PairOutcome, 5> kPairOutcomeNames{{{PairOutcome::board_found, "board_found"},
+                                                             {PairOutcome::no_board_left, "no_board_left"},
+                                                             {PairOutcome::no_board_right, "no_board_right"},
+                                                             {PairOutcome::ids_ambiguous, "ids_ambiguous"},
+                                                             {PairOutcome::pose_failed, "pose_failed"}}};
+}  // namespace
+
 const char* to_string(PairOutcome o) {
-  switch (o) {
-    case PairOutcome::board_found:
-      return "board_found";
-    case PairOutcome::no_board_left:
-      return "no_board_left";
-    case PairOutcome::no_board_right:
-      return "no_board_right";
-    case PairOutcome::ids_ambiguous:
-      return "ids_ambiguous";
-    case PairOutcome::pose_failed:
-      return "pose_failed";
-  }
-  return "unknown";
+  return base::enum_name(kPairOutcomeNames, o);
 }
 
 StereoReconstructor::StereoReconstructor(const StereoRig& rig, const StereoReconstructorSettings& settings)

@@ -303,15 +303,6 @@ Solved solve(std::span<const PlaneCorrespondences> planes, const DivisionHomogra
 
 }  // namespace
 
-std::vector<double> division_transfer_residuals(const Eigen::Matrix3d& H, double lambda_left,
-                                                double lambda_right, std::span<const Eigen::Vector2d> left,
-                                                std::span<const Eigen::Vector2d> right) {
-  std::vector<double> out(4 * std::min(left.size(), right.size()));
-  transfer(H, H.inverse(), lambda_left, lambda_right, left.first(out.size() / 4), right.first(out.size() / 4),
-           out.data());
-  return out;
-}
-
 DivisionHomography estimate_division_homography(std::span<const Eigen::Vector2d> left,
                                                 std::span<const Eigen::Vector2d> right,
                                                 const DivisionHomographyOptions& opt) {

@@ -1,17 +1,17 @@
 #include "naneye/recon/paper/division_rig.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <Eigen/LU>
 
 namespace naneye::recon {
 
+namespace {
+constexpr base::EnumTable<DivisionVariant, 2> kDivisionVariantNames{
+    {{DivisionVariant::image_centre, "image_centre"}, {DivisionVariant::normalized, "normalized"}}};
+}  // namespace
+
 const char* to_string(DivisionVariant v) {
-  switch (v) {
-    case DivisionVariant::image_centre:
-      return "image_centre";
-    case DivisionVariant::normalized:
-      return "normalized";
-  }
-  return "unknown";
+  return base::enum_name(kDivisionVariantNames, v);
 }
 
 Eigen::Vector3d DivisionCamera::ray(const Eigen::Vector2d& px) const {

@@ -1,4 +1,5 @@
 #include "naneye/recon/paper/division_triangulation.hpp"
+#include "naneye/base/enum_table.hpp"
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -7,14 +8,13 @@
 
 namespace naneye::recon {
 
+namespace {
+constexpr base::EnumTable<DirectSolve, 2> kDirectSolveNames{
+    {{DirectSolve::per_point, "per_point"}, {DirectSolve::one_svd, "one_svd"}}};
+}  // namespace
+
 const char* to_string(DirectSolve s) {
-  switch (s) {
-    case DirectSolve::per_point:
-      return "per_point";
-    case DirectSolve::one_svd:
-      return "one_svd";
-  }
-  return "unknown";
+  return base::enum_name(kDirectSolveNames, s);
 }
 
 DirectTriangulation triangulate_distorted(const DivisionRig& rig, std::span<const Eigen::Vector2d> px_left,

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "naneye/base/enum_table.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 
 namespace naneye::recon::scene {
@@ -46,24 +47,19 @@ Eigen::Matrix2d predicted_affine(const StereoRig& rig, const Eigen::Vector2d& xl
 }
 }  // namespace
 
+namespace {
+constexpr base::EnumTable<PointStatus, 7> kPointStatusNames{
+    {{PointStatus::ok, "ok"},
+     {PointStatus::no_candidates, "no_candidates"},
+     {PointStatus::weak_match, "weak_match"},
+     {PointStatus::ambiguous, "ambiguous"},
+     {PointStatus::refinement_failed, "refinement_failed"},
+     {PointStatus::left_right_mismatch, "left_right_mismatch"},
+     {PointStatus::triangulation_failed, "triangulation_failed"}}};
+}  // namespace
+
 const char* to_string(PointStatus s) {
-  switch (s) {
-    case PointStatus::ok:
-      return "ok";
-    case PointStatus::no_candidates:
-      return "no_candidates";
-    case PointStatus::weak_match:
-      return "weak_match";
-    case PointStatus::ambiguous:
-      return "ambiguous";
-    case PointStatus::refinement_failed:
-      return "refinement_failed";
-    case PointStatus::left_right_mismatch:
-      return "left_right_mismatch";
-    case PointStatus::triangulation_failed:
-      return "triangulation_failed";
-  }
-  return "?";
+  return base::enum_name(kPointStatusNames, s, "?");
 }
 
 SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSettings& s)

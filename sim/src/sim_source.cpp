@@ -8,11 +8,18 @@
 #include <vector>
 
 #include "log.hpp"
+#include "naneye/base/clock.hpp"
+#include "naneye/base/enum_table.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/stream.hpp"
 
 namespace naneye::sim {
 namespace {
+
+constexpr base::EnumTable<Motion, 4> kMotionNames{{{Motion::orbit, "orbit"},
+                                                   {Motion::sweep, "sweep"},
+                                                   {Motion::still, "still"},
+                                                   {Motion::handheld, "handheld"}}};
 
 template <typename T>
 T number(const driver::SourceUri& uri, const char* name, T fallback, T lo, T hi) {
@@ -52,16 +59,10 @@ SimSourceOptions parse_sim_uri(const driver::SourceUri& uri) {
     throw driver::SourceError("sim: supersample is for the textured scenes only");
   o.supersample = number(uri, "supersample", 1, 1, 3);
   if (const auto m = uri.param("motion")) {
-    if (*m == "orbit")
-      o.motion = Motion::orbit;
-    else if (*m == "sweep")
-      o.motion = Motion::sweep;
-    else if (*m == "still")
-      o.motion = Motion::still;
-    else if (*m == "handheld")
-      o.motion = Motion::handheld;
+    if (const auto motion = base::enum_parse(kMotionNames, *m))
+      o.motion = *motion;
     else
-      throw driver::SourceError("sim: motion=" + *m + " (orbit, sweep, still, handheld)");
+      throw driver::SourceError("sim: motion=" + *m + " (" + base::enum_names(kMotionNames) + ")");
     // Each trajectory belongs to one kind of scene: a board orbits or sweeps, a hand holds the
     // camera over a textured surface (or keeps it still).
     if (o.textured != (o.motion == Motion::handheld) && o.motion != Motion::still)
@@ -159,8 +160,9 @@ void SimSource::run() {
   timing.fps_start = options_.fps;
   const std::uint64_t start_ticks = rng() % (std::uint64_t{1} << 32);
   FrameClock clock(timing, start_ticks, rng);
-  RecordWriter writer([this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, monotonic_ns()); }, {},
-                      0, static_cast<std::uint8_t>(rng()));
+  RecordWriter writer(
+      [this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, base::monotonic_ns()); }, {}, 0,
+      static_cast<std::uint8_t>(rng()));
   std::vector<std::uint16_t> left(driver::kPixelCount), right(driver::kPixelCount);
   Renderer::Scratch scratch;
   const auto t0 = std::chrono::steady_clock::now();
@@ -186,7 +188,7 @@ void SimSource::run() {
       writer.finish();  // hand the record over now: a live source never holds one back
     }
   }
-  end_of_stream(monotonic_ns());
+  end_of_stream(base::monotonic_ns());
 }
 
 void SimSource::run_textured() {
@@ -200,8 +202,9 @@ void SimSource::run_textured() {
   timing.fps_step = std::min(timing.fps_step, 0.005 * options_.fps);
   const std::uint64_t start_ticks = rng() % (std::uint64_t{1} << 32);
   FrameClock clock(timing, start_ticks, rng);
-  RecordWriter writer([this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, monotonic_ns()); }, {},
-                      0, static_cast<std::uint8_t>(rng()));
+  RecordWriter writer(
+      [this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, base::monotonic_ns()); }, {}, 0,
+      static_cast<std::uint8_t>(rng()));
   cv::Mat left, right;
   const auto t0 = std::chrono::steady_clock::now();
   std::uint64_t late = 0;
@@ -234,7 +237,7 @@ void SimSource::run_textured() {
       writer.finish();
     }
   }
-  end_of_stream(monotonic_ns());
+  end_of_stream(base::monotonic_ns());
 }
 
 void register_sim_source(driver::SourceRegistry& registry) {

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "naneye/base/enum_table.hpp"
 #include "naneye/sim/textured.hpp"
 
 namespace naneye::sim {
@@ -75,18 +76,15 @@ std::optional<double> intersect_height(const Surface& s, const Eigen::Vector3d& 
 
 }  // namespace
 
+namespace {
+constexpr base::EnumTable<SurfaceKind, 4> kSurfaceKindNames{{{SurfaceKind::plane, "plane"},
+                                                             {SurfaceKind::sphere, "sphere"},
+                                                             {SurfaceKind::tube, "tube"},
+                                                             {SurfaceKind::height_field, "height_field"}}};
+}  // namespace
+
 const char* to_string(SurfaceKind k) {
-  switch (k) {
-    case SurfaceKind::plane:
-      return "plane";
-    case SurfaceKind::sphere:
-      return "sphere";
-    case SurfaceKind::tube:
-      return "tube";
-    case SurfaceKind::height_field:
-      return "height_field";
-  }
-  return "?";
+  return base::enum_name(kSurfaceKindNames, k, "?");
 }
 
 std::optional<double> Surface::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {

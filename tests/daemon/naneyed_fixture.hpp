@@ -50,6 +50,17 @@ class NaneyedTest : public ::testing::Test {
     client->set_read_timeout(10, 0);
   }
 
+  // Serves a lossless replay of `file` (file://...?speed=max, `extra` appended to the config) and
+  // waits until its `pairs` pairs are processed and, with `until_ended`, the replay has ended (the
+  // latest result then stays, so every endpoint reads the same pair). Returns that status.
+  nlohmann::json serve_replay(const std::filesystem::path& file, int pairs, const std::string& extra = "",
+                              bool until_ended = false) {
+    start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n" + extra);
+    return wait_status([&](const nlohmann::json& s) {
+      return s["pairs"]["processed"] == pairs && (!until_ended || s["state"] == "stopped");
+    });
+  }
+
   nlohmann::json get_json(const std::string& path, int expected_status = 200) {
     auto res = client->Get(path.c_str());
     EXPECT_TRUE(res) << path;

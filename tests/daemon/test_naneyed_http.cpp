@@ -65,8 +65,7 @@ TEST_F(NaneyedTest, AKeepAliveConnectionServesAHundredRequestsAndEachIsCounted) 
 TEST_F(NaneyedTest, DepthAndEventsServeTheSameTextOfAResult) {
   const int n = 12;
   const auto file = capture(n);
-  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
-  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  serve_replay(file, n);
 
   const auto a = client->Get("/v1/depth");
   const auto b = client->Get("/v1/depth");
@@ -101,8 +100,7 @@ TEST_F(NaneyedTest, BodiesAreNeverCompressedEvenWhenTheClientAcceptsIt) {
   // httplib would compress each of them per request (brotli quality 11: milliseconds of CPU for one
   // /v1/depth); naneyed sends them as they are, which any client accepts.
   const auto file = capture(12);
-  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
-  wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] == 12; });
+  serve_replay(file, 12);
   RawClient conn(port);
   ASSERT_TRUE(conn.connected());
   for (const char* path : {"/v1/depth", "/v1/status", "/metrics", "/v1/points", "/v1/nothing"}) {
@@ -158,8 +156,7 @@ TEST_F(NaneyedTest, AResumePointFromAnEarlierRunStartsAtTheLatestResult) {
   // ids restart at 1, so it used to wait (silently) until this run caught up with it.
   const int n = 12;
   const auto file = capture(n);
-  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n");
-  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  serve_replay(file, n);
   for (const std::string how : {"query", "header"}) {
     std::string buffer, first_id;
     httplib::Headers headers;

@@ -38,11 +38,7 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
   const auto file = dir.path / "sphere.raw";
   write_scene_capture(file, 2);
   // A lossless replay that ends: the latest result then stays, so every endpoint reads the same pair.
-  start("[source]\nuri = \"file://" + file.string() +
-        "?speed=max\"\n[board]\ntracking = true\n"
-        "[recon]\nmode = \"scene\"\n");
-  wait_status(
-      [](const nlohmann::json& s) { return s["pairs"]["processed"] == 2 && s["state"] == "stopped"; });
+  serve_replay(file, 2, "[board]\ntracking = true\n[recon]\nmode = \"scene\"\n", true);
 
   const auto d = get_json("/v1/depth");
   EXPECT_EQ(d["pair"], 1);
@@ -172,11 +168,7 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
 TEST_F(NaneyedTest, BoardModeHasNoSceneAndNoDepthMap) {
   const auto file = dir.path / "sphere.raw";
   write_scene_capture(file, 1);
-  start("[source]\nuri = \"file://" + file.string() +
-        "?speed=max\"\n[board]\ntracking = true\n"
-        "[recon]\nmode = \"board\"\n");
-  wait_status(
-      [](const nlohmann::json& s) { return s["pairs"]["processed"] == 1 && s["state"] == "stopped"; });
+  serve_replay(file, 1, "[board]\ntracking = true\n[recon]\nmode = \"board\"\n", true);
   const auto d = get_json("/v1/depth");
   EXPECT_FALSE(d.contains("scene"));
   const auto e = get_json("/v1/depth.png", 503);

@@ -47,8 +47,7 @@ std::vector<Event> read_events(httplib::Client& client, const std::string& path,
 TEST_F(NaneyedTest, AnEventClientReceivesEveryPairOfAMaxSpeedReplay) {
   const int n = 150;
   const auto file = capture(n);
-  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n[pipeline]\nhistory = 256\n");
-  const auto st = wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  const auto st = serve_replay(file, n, "[pipeline]\nhistory = 256\n");
   EXPECT_EQ(st["source"]["live"], false);
   EXPECT_EQ(st["counters"]["pairs_dropped"], 0);
   EXPECT_EQ(st["counters"]["pairs"], n);
@@ -73,8 +72,7 @@ TEST_F(NaneyedTest, AnEventClientReceivesEveryPairOfAMaxSpeedReplay) {
 TEST_F(NaneyedTest, AClientTooFarBehindIsDroppedAndThePipelineGoesOn) {
   const int n = 40;
   const auto file = capture(n);
-  start("[source]\nuri = \"file://" + file.string() + "?speed=max\"\n[pipeline]\nhistory = 8\n");
-  wait_status([&](const nlohmann::json& s) { return s["pairs"]["processed"] == n; });
+  serve_replay(file, n, "[pipeline]\nhistory = 8\n");
   // Result 1 was overwritten long ago: the client is told and dropped.
   const auto events = read_events(*client, "/v1/events?last_event_id=0", 1000);
   ASSERT_EQ(events.size(), 1u);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <functional>
 #include <thread>
 
 #include "capture.hpp"
@@ -22,6 +23,31 @@ std::shared_ptr<const recon::StereoRig> paper_rig() {
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml"));
 }
 
+// A pipeline on a file:// replay of `file` (`query`: its parameters), the driver's sources and the
+// paper's rig.
+std::unique_ptr<daemon::Pipeline> replay_pipeline(const daemon::Settings& settings,
+                                                  const std::filesystem::path& file,
+                                                  const std::string& query) {
+  return std::make_unique<daemon::Pipeline>(
+      settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+      daemon::SourceChoice{"file://" + file.string() + "?" + query, "test", false}, paper_rig());
+}
+
+// Starts the pipeline and runs `reader` on two threads (each until `done`) while it processes `n`
+// pairs (or `timeout` passes); returns once the readers are joined.
+void process_while_reading(daemon::Pipeline& pipeline, std::uint64_t n, std::chrono::seconds timeout,
+                           const std::function<void(const std::atomic<bool>& done)>& reader) {
+  std::atomic<bool> done{false};
+  pipeline.start();
+  std::thread a([&] { reader(done); }), b([&] { reader(done); });
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  while (pipeline.pairs_processed() < n && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  done.store(true);
+  a.join();
+  b.join();
+}
+
 }  // namespace
 
 TEST(Pipeline, PublishesEveryPairOfALosslessReplayWhileReadersRead) {
@@ -32,21 +58,18 @@ TEST(Pipeline, PublishesEveryPairOfALosslessReplayWhileReadersRead) {
   settings.detect = false;  // the hand-over and publication are under test, on frames without a board
   settings.history = 128;
   settings.frame_snapshot_interval_ms = 0;  // every pair: the most contention on the frame slots
-  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
-                            {"file://" + (dir.path / "c.raw").string() + "?speed=max", "test", false},
-                            paper_rig());
-  std::atomic<bool> done{false};
+  const auto pipeline = replay_pipeline(settings, dir.path / "c.raw", "speed=max");
   std::atomic<int> bad{0}, reads{0};
-  auto reader = [&] {
+  auto reader = [&](const std::atomic<bool>& done) {
     std::uint64_t last = 0;
     while (!done.load()) {
-      pipeline.results().read_latest([&](const daemon::Published& p, std::uint64_t seq) {
+      pipeline->results().read_latest([&](const daemon::Published& p, std::uint64_t seq) {
         bad += p.seq != seq || seq < last || p.result.pair + 1 != seq ||
                p.result.t_right_ns - p.result.t_left_ns != truth.offset_ns();
         last = seq;
         ++reads;
       });
-      pipeline.frames().read_latest([&](const daemon::FrameSnapshot& f, std::uint64_t) {
+      pipeline->frames().read_latest([&](const daemon::FrameSnapshot& f, std::uint64_t) {
         const int k = static_cast<int>(f.pair % n);
         for (int r : {1, 77, 200})
           for (int c : {5, 120, 248}) {
@@ -54,37 +77,28 @@ TEST(Pipeline, PublishesEveryPairOfALosslessReplayWhileReadersRead) {
             bad += f.right[static_cast<std::size_t>(r) * 250 + c] != pixel(k, 1, r, c);
           }
       });
-      (void)pipeline.status();
+      (void)pipeline->status();
     }
   };
-  pipeline.start();
-  std::thread a(reader), b(reader);
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (pipeline.pairs_processed() < static_cast<std::uint64_t>(n) &&
-         std::chrono::steady_clock::now() < until) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  done.store(true);
-  a.join();
-  b.join();
-  ASSERT_EQ(pipeline.pairs_processed(), static_cast<std::uint64_t>(n));
+  process_while_reading(*pipeline, n, std::chrono::seconds(20), reader);
+  ASSERT_EQ(pipeline->pairs_processed(), static_cast<std::uint64_t>(n));
   EXPECT_EQ(bad.load(), 0);
   EXPECT_GT(reads.load(), 0);
   // Every result is still held, in order, each the pair it claims to be.
   for (std::uint64_t seq = 1; seq <= static_cast<std::uint64_t>(n); ++seq) {
-    EXPECT_TRUE(pipeline.results().read_seq(seq, [&](const daemon::Published& p) {
+    EXPECT_TRUE(pipeline->results().read_seq(seq, [&](const daemon::Published& p) {
       EXPECT_EQ(p.result.pair, seq - 1);
       EXPECT_GE(p.published_ns, p.capture_ns);
     })) << seq;
   }
-  const auto st = pipeline.status();
+  const auto st = pipeline->status();
   EXPECT_EQ(st.counters.pairs_dropped, 0u);
   EXPECT_EQ(st.publish_skipped, 0u);
   EXPECT_NEAR(st.fps_left, truth.fps(), 0.01);
   EXPECT_EQ(st.offset_ns, truth.offset_ns());
   EXPECT_EQ(st.recon.count, static_cast<std::uint64_t>(n));
-  pipeline.stop();
-  EXPECT_EQ(pipeline.status().state, daemon::ServiceState::stopped);
+  pipeline->stop();
+  EXPECT_EQ(pipeline->status().state, daemon::ServiceState::stopped);
 }
 
 TEST(Pipeline, ReloadsTheRigBetweenPairs) {
@@ -92,21 +106,19 @@ TEST(Pipeline, ReloadsTheRigBetweenPairs) {
   write_capture(dir.path / "c.raw", 20);
   daemon::Settings settings;
   settings.detect = false;  // the hand-over and publication are under test, on frames without a board
-  daemon::Pipeline pipeline(
-      settings, daemon::make_processor(settings), daemon::driver_source_factory(),
-      {"file://" + (dir.path / "c.raw").string() + "?speed=realtime&loop=1", "test", false}, paper_rig());
-  pipeline.start();
+  const auto pipeline = replay_pipeline(settings, dir.path / "c.raw", "speed=realtime&loop=1");
+  pipeline->start();
   auto other = std::make_shared<recon::StereoRig>(*paper_rig());
   other->T *= 2.0;
   const double baseline = other->baseline_mm();
-  pipeline.reload_rig(other);
-  EXPECT_DOUBLE_EQ(pipeline.rig()->baseline_mm(), baseline);
+  pipeline->reload_rig(other);
+  EXPECT_DOUBLE_EQ(pipeline->rig()->baseline_mm(), baseline);
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (pipeline.status().calibration_reloads == 0 && std::chrono::steady_clock::now() < until) {
+  while (pipeline->status().calibration_reloads == 0 && std::chrono::steady_clock::now() < until) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  EXPECT_EQ(pipeline.status().calibration_reloads, 1u);
-  pipeline.stop();
+  EXPECT_EQ(pipeline->status().calibration_reloads, 1u);
+  pipeline->stop();
 }
 
 // [recon] mode both on a textured scene: readers always find a result's scene beside it and, when
@@ -118,37 +130,26 @@ TEST(Pipeline, SceneResultsAndTheirMapsBelongToTheirPair) {
   write_scene_capture(dir.path / "s.raw", n);
   daemon::Settings settings;
   settings.recon_mode = daemon::ReconMode::both;
-  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
-                            {"file://" + (dir.path / "s.raw").string() + "?speed=max", "test", false},
-                            paper_rig());
-  std::atomic<bool> done{false};
+  const auto pipeline = replay_pipeline(settings, dir.path / "s.raw", "speed=max");
   std::atomic<int> bad{0}, with_scene{0}, with_map{0};
-  auto reader = [&] {
+  auto reader = [&](const std::atomic<bool>& done) {
     while (!done.load()) {
-      pipeline.results().read_latest([&](const daemon::Published& p, std::uint64_t seq) {
+      pipeline->results().read_latest([&](const daemon::Published& p, std::uint64_t seq) {
         bad += !p.scene.computed || p.result.pair + 1 != seq;
         with_scene += p.scene.computed && p.scene.sparse.valid_count > 0;
         if (!p.scene.dense) return;
-        pipeline.depth_maps().read_seq(seq, [&](const daemon::DepthSlot& d) {
+        pipeline->depth_maps().read_seq(seq, [&](const daemon::DepthSlot& d) {
           bad += d.seq != seq || d.pair != p.result.pair || d.map.valid_count != p.scene.depth.valid_count;
           ++with_map;
         });
       });
     }
   };
-  pipeline.start();
-  std::thread a(reader), b(reader);
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (pipeline.pairs_processed() < static_cast<std::uint64_t>(n) &&
-         std::chrono::steady_clock::now() < until)
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  done.store(true);
-  a.join();
-  b.join();
-  ASSERT_EQ(pipeline.pairs_processed(), static_cast<std::uint64_t>(n));
+  process_while_reading(*pipeline, n, std::chrono::seconds(60), reader);
+  ASSERT_EQ(pipeline->pairs_processed(), static_cast<std::uint64_t>(n));
   EXPECT_EQ(bad.load(), 0);
   EXPECT_GT(with_scene.load(), 0);
-  const auto st = pipeline.status();
+  const auto st = pipeline->status();
   ASSERT_TRUE(st.scene.has_value());
   EXPECT_EQ(st.scene_pairs, static_cast<std::uint64_t>(n));
   EXPECT_GT(st.scene->valid_points, 300);
@@ -156,5 +157,5 @@ TEST(Pipeline, SceneResultsAndTheirMapsBelongToTheirPair) {
   EXPECT_EQ(st.dense_pairs, static_cast<std::uint64_t>(n));
   EXPECT_TRUE(st.scene->depth.has_value());
   EXPECT_GT(with_map.load(), 0);
-  pipeline.stop();
+  pipeline->stop();
 }

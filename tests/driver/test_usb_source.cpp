@@ -65,8 +65,8 @@ UsbSourceSettings settings_for(const UsbDeviceSpec& spec, int count, int size) {
   s.transport.profile.pid = spec.pid;
   s.transport.profile.transfer_count = count;
   s.transport.profile.transfer_size = size;
-  s.transport.backoff_initial = std::chrono::milliseconds(20);
-  s.transport.backoff_max = std::chrono::milliseconds(200);
+  s.transport.backoff.initial_ms = 20;
+  s.transport.backoff.max_ms = 200;
   s.stream.ring_capacity = 32;  // room for a whole test capture: a slow (sanitized) reader drops nothing
   return s;
 }

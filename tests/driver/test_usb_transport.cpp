@@ -69,8 +69,8 @@ UsbTransportSettings settings_for(const UsbDeviceSpec& spec, int count, int size
   s.profile.endpoint = spec.endpoint;
   s.profile.transfer_count = count;
   s.profile.transfer_size = size;
-  s.backoff_initial = std::chrono::milliseconds(20);
-  s.backoff_max = std::chrono::milliseconds(200);
+  s.backoff.initial_ms = 20;
+  s.backoff.max_ms = 200;
   s.stall_timeout = std::chrono::milliseconds(300);
   return s;
 }
@@ -187,8 +187,8 @@ TEST(UsbTransport, HotplugArrivalCutsTheBackoffShort) {
   emu.unplug_after(20'000);
   CollectingSink sink;
   auto s = settings_for(spec, 4, 4096);
-  s.backoff_initial = std::chrono::milliseconds(20'000);  // polling alone would not retry within the test
-  s.backoff_max = s.backoff_initial;
+  s.backoff.initial_ms = 20'000;  // polling alone would not retry within the test
+  s.backoff.max_ms = s.backoff.initial_ms;
   UsbTransport t(s, sink);
   t.start();
   ASSERT_TRUE(emu.wait_unplugged(10000));

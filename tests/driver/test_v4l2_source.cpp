@@ -84,14 +84,37 @@ V4l2Settings fast_settings(V4l2Layout l, std::optional<V4l2Format> f) {
   s.layout = l;
   s.format = f;
   s.poll_timeout = std::chrono::milliseconds(20);
-  s.backoff_initial = std::chrono::milliseconds(10);
-  s.backoff_max = std::chrono::milliseconds(100);
+  s.backoff.initial_ms = 10;
+  s.backoff.max_ms = 100;
   s.ring_size = 16;
   s.pool_size = 20;
   return s;
 }
 
 constexpr std::int64_t kPeriodNs = 22'700'000;
+
+// A node offering `formats` (at the spec's default size unless given) plugged with `frames`, and a
+// started source of `s` reading it.
+std::unique_ptr<FrameSource> plug_and_start(V4l2Emulator& emu, std::deque<V4l2Frame> frames,
+                                            const V4l2Settings& s,
+                                            std::vector<std::uint32_t> formats = {V4L2_PIX_FMT_Y10},
+                                            std::uint32_t width = 0, std::uint32_t height = 0) {
+  V4l2DeviceSpec spec;
+  spec.formats = std::move(formats);
+  if (width) spec.width = width;
+  if (height) spec.height = height;
+  emu.plug(spec, std::move(frames));
+  auto src = make_v4l2_source(s);
+  src->start();
+  return src;
+}
+
+// Waits up to 5 s for the source to reach `state`.
+void wait_for(const FrameSource& src, SourceState state) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (src.state() != state && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+}
 
 }  // namespace
 
@@ -100,17 +123,13 @@ class V4l2Formats : public ::testing::TestWithParam<std::tuple<V4l2Layout, V4l2F
 TEST_P(V4l2Formats, EveryPairArrivesBitExactWithBufferTimestamps) {
   const auto [layout, format] = GetParam();
   V4l2Emulator emu;
-  V4l2DeviceSpec spec;
   int w = 0, h = 0;
   layout_size(layout, w, h);
-  spec.width = static_cast<std::uint32_t>(w);
-  spec.height = static_cast<std::uint32_t>(h);
-  spec.formats = {V4L2_PIX_FMT_YUYV, fourcc(format)};
   std::deque<V4l2Frame> frames;
   for (int i = 0; i < 6; ++i) frames.push_back(make_frame(layout, format, i, 1'000'000'000 + i * kPeriodNs));
-  emu.plug(spec, std::move(frames));
-  auto src = make_v4l2_source(fast_settings(layout, format));
-  src->start();
+  auto src = plug_and_start(emu, std::move(frames), fast_settings(layout, format),
+                            {V4L2_PIX_FMT_YUYV, fourcc(format)}, static_cast<std::uint32_t>(w),
+                            static_cast<std::uint32_t>(h));
   for (int i = 0; i < 6; ++i) {
     PairPtr p = src->next(std::chrono::seconds(5));
     ASSERT_TRUE(p) << "pair " << i;
@@ -141,9 +160,6 @@ INSTANTIATE_TEST_SUITE_P(LayoutsAndFormats, V4l2Formats,
 TEST(V4l2Source, AlternateFieldsPairByNearestTimestamp) {
   for (auto format : {V4l2Format::y10, V4l2Format::y16, V4l2Format::grey, V4l2Format::sgrbg10}) {
     V4l2Emulator emu;
-    V4l2DeviceSpec spec;
-    spec.width = spec.height = 250;
-    spec.formats = {fourcc(format)};
     std::deque<V4l2Frame> frames;
     for (int i = 0; i < 4; ++i) {
       for (int eye = 0; eye < 2; ++eye) {
@@ -153,9 +169,8 @@ TEST(V4l2Source, AlternateFieldsPairByNearestTimestamp) {
         frames.push_back(std::move(f));
       }
     }
-    emu.plug(spec, std::move(frames));
-    auto src = make_v4l2_source(fast_settings(V4l2Layout::alternate, format));
-    src->start();
+    auto src = plug_and_start(emu, std::move(frames), fast_settings(V4l2Layout::alternate, format),
+                              {fourcc(format)}, 250, 250);
     for (int i = 0; i < 4; ++i) {
       PairPtr p = src->next(std::chrono::seconds(5));
       ASSERT_TRUE(p) << to_string(format) << " pair " << i;
@@ -169,18 +184,14 @@ TEST(V4l2Source, AlternateFieldsPairByNearestTimestamp) {
 
 TEST(V4l2Source, AlternateBySequenceParityCountsUnpaired) {
   V4l2Emulator emu;
-  V4l2DeviceSpec spec;
-  spec.width = spec.height = 250;
-  spec.formats = {V4L2_PIX_FMT_Y10};
   std::deque<V4l2Frame> frames;
   // Field NONE, so sequence parity decides the eye: 0 L + 1 R pair; 3 R comes 30 ms after 2 L and
   // 4 L 30 ms after 3 R, so 2 and 3 find no partner (unpaired = 2); 4 L + 5 R pair.
   const std::int64_t ts[] = {0, 3'000'000, 22'700'000, 52'700'000, 82'700'000, 85'000'000};
   for (int i = 0; i < 6; ++i)
     frames.push_back(make_frame(V4l2Layout::alternate, V4l2Format::y10, i, ts[i], 0));
-  emu.plug(spec, std::move(frames));
-  auto src = make_v4l2_source(fast_settings(V4l2Layout::alternate, V4l2Format::y10));
-  src->start();
+  auto src = plug_and_start(emu, std::move(frames), fast_settings(V4l2Layout::alternate, V4l2Format::y10),
+                            {V4L2_PIX_FMT_Y10}, 250, 250);
   PairPtr a = src->next(std::chrono::seconds(5));
   PairPtr b = src->next(std::chrono::seconds(5));
   ASSERT_TRUE(a && b);
@@ -207,9 +218,7 @@ TEST(V4l2Source, DeviceLossWaitsAndResumes) {
   auto src = make_v4l2_source(fast_settings(V4l2Layout::side_by_side, V4l2Format::y10));
   src->start();
   for (int i = 0; i < 4; ++i) ASSERT_TRUE(src->next(std::chrono::seconds(5)));
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (src->state() != SourceState::waiting_for_device && std::chrono::steady_clock::now() < until)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  wait_for(*src, SourceState::waiting_for_device);
   ASSERT_EQ(src->state(), SourceState::waiting_for_device);
   EXPECT_TRUE(emu.unplugged());
   std::this_thread::sleep_for(std::chrono::milliseconds(60));  // a few failed attempts on the missing node
@@ -259,22 +268,16 @@ TEST(V4l2Source, RefusesALayoutOfTheWrongSize) {
 
 TEST(V4l2Source, NoFrameForTheStallTimeoutIsAStall) {
   V4l2Emulator emu;
-  V4l2DeviceSpec spec;
-  spec.formats = {V4L2_PIX_FMT_Y10};
   std::deque<V4l2Frame> frames;
   frames.push_back(make_frame(V4l2Layout::side_by_side, V4l2Format::y10, 0, 0));
   V4l2Frame damaged = make_frame(V4l2Layout::side_by_side, V4l2Format::y10, 1, kPeriodNs);
   damaged.error = true;
   frames.push_back(std::move(damaged));
-  emu.plug(spec, std::move(frames));
   auto s = fast_settings(V4l2Layout::side_by_side, std::nullopt);  // format picked from ENUM_FMT
   s.stall_timeout = std::chrono::milliseconds(150);
-  auto src = make_v4l2_source(s);
-  src->start();
+  auto src = plug_and_start(emu, std::move(frames), s);
   ASSERT_TRUE(src->next(std::chrono::seconds(5)));
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (src->state() != SourceState::stalled && std::chrono::steady_clock::now() < until)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  wait_for(*src, SourceState::stalled);
   EXPECT_EQ(src->state(), SourceState::stalled);
   const auto c = src->counters();
   EXPECT_EQ(c.stalls, 1u);
@@ -322,11 +325,7 @@ TEST(V4l2Source, ReferencePixelsAreNotCheckedUnlessTheUriSaysTheGrabberCarriesTh
   // Every V4L2 frame was marked reference_ok = true without a look at its pixels, even frame 1,
   // whose right eye fails the check.
   V4l2Emulator emu;
-  V4l2DeviceSpec spec;
-  spec.formats = {V4L2_PIX_FMT_Y10};
-  emu.plug(spec, frames_with_reference());
-  auto src = make_v4l2_source(from_uri("v4l2:///dev/video0?format=Y10"));
-  src->start();
+  auto src = plug_and_start(emu, frames_with_reference(), from_uri("v4l2:///dev/video0?format=Y10"));
   for (int i = 0; i < 3; ++i) {
     PairPtr p = src->next(std::chrono::seconds(5));
     ASSERT_TRUE(p) << i;
@@ -339,11 +338,8 @@ TEST(V4l2Source, ReferencePixelsAreNotCheckedUnlessTheUriSaysTheGrabberCarriesTh
 
 TEST(V4l2Source, WithReferenceCheckEachEyeSaysPassedOrFailed) {
   V4l2Emulator emu;
-  V4l2DeviceSpec spec;
-  spec.formats = {V4L2_PIX_FMT_Y10};
-  emu.plug(spec, frames_with_reference());
-  auto src = make_v4l2_source(from_uri("v4l2:///dev/video0?format=Y10&reference=check"));
-  src->start();
+  auto src =
+      plug_and_start(emu, frames_with_reference(), from_uri("v4l2:///dev/video0?format=Y10&reference=check"));
   const ReferenceStatus want_right[] = {ReferenceStatus::passed, ReferenceStatus::failed,
                                         ReferenceStatus::passed};
   for (int i = 0; i < 3; ++i) {
@@ -358,11 +354,8 @@ TEST(V4l2Source, WithReferenceCheckEachEyeSaysPassedOrFailed) {
 
 TEST(V4l2Source, WithReferenceRejectAFailingPairIsNotDelivered) {
   V4l2Emulator emu;
-  V4l2DeviceSpec spec;
-  spec.formats = {V4L2_PIX_FMT_Y10};
-  emu.plug(spec, frames_with_reference());
-  auto src = make_v4l2_source(from_uri("v4l2:///dev/video0?format=Y10&reference=reject"));
-  src->start();
+  auto src = plug_and_start(emu, frames_with_reference(),
+                            from_uri("v4l2:///dev/video0?format=Y10&reference=reject"));
   PairPtr a = src->next(std::chrono::seconds(5));
   PairPtr b = src->next(std::chrono::seconds(5));
   ASSERT_TRUE(a && b);

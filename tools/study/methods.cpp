@@ -2,36 +2,29 @@
 // against the truth (E).
 #include <cmath>
 
-#include "naneye/recon/paper/division_triangulation.hpp"
+#include "naneye/base/enum_table.hpp"
 #include "naneye/recon/geometry/metrics.hpp"
-#include "naneye/recon/paper/plane_sweep.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
+#include "naneye/recon/paper/division_triangulation.hpp"
+#include "naneye/recon/paper/plane_sweep.hpp"
 #include "study.hpp"
 
 namespace naneye::tools::study {
 
+namespace {
+constexpr base::EnumTable<Method, 8> kMethodNames{
+    {{poly_tri, "polynomial, triangulated (ours: niter2 + refinement)"},
+     {poly_dlt, "polynomial, exact undistortion + DLT"},
+     {poly_board, "polynomial, board pose (ours)"},
+     {div_tri, "division, image centre + DLT"},
+     {div_sweep, "division, image centre + plane sweep"},
+     {norm_tri, "division, normalized + DLT"},
+     {norm_direct, "division, normalized, Eq. 10 direct (one SVD)"},
+     {opencv, "OpenCV path (findChessboardCorners + cornerSubPix, undistortPoints, triangulatePoints)"}}};
+}  // namespace
+
 const char* method_name(Method m) {
-  switch (m) {
-    case poly_tri:
-      return "polynomial, triangulated (ours: niter2 + refinement)";
-    case poly_dlt:
-      return "polynomial, exact undistortion + DLT";
-    case poly_board:
-      return "polynomial, board pose (ours)";
-    case div_tri:
-      return "division, image centre + DLT";
-    case div_sweep:
-      return "division, image centre + plane sweep";
-    case norm_tri:
-      return "division, normalized + DLT";
-    case norm_direct:
-      return "division, normalized, Eq. 10 direct (one SVD)";
-    case opencv:
-      return "OpenCV path (findChessboardCorners + cornerSubPix, undistortPoints, triangulatePoints)";
-    case kMethodCount:
-      break;
-  }
-  return "?";
+  return base::enum_name(kMethodNames, m, "?");
 }
 
 namespace {

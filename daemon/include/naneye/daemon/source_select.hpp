@@ -22,7 +22,7 @@ SourceChoice choose_source(const Settings& settings, const BoardLister& boards);
 // The driver's registry: opens usb://, v4l2://, file://, sim:// URIs.
 // Every scheme a source URI may name: the driver's (usb, v4l2, file) and the simulator's sim://.
 driver::SourceRegistry make_source_registry();
-SourceFactory driver_source_factory();
+SourceOpener driver_source_factory();
 // Attached boards as the driver enumerates them (empty when the driver cannot enumerate).
 std::vector<std::string> attached_boards();
 

@@ -1,8 +1,9 @@
 #pragma once
 // ByteStreamSource: the common body of every source that receives the camera's byte stream (usb://,
 // v4l2://, file://). A backend implements open() and run(); run() executes on the source's capture
-// thread and calls feed() once per transfer as it arrives. feed() taps the raw bytes (recording),
-// then parser -> pairer -> pool buffer -> PairRing -> next(). Counters are atomics, snapshotted.
+// thread and calls feed() once per transfer as it arrives (host_ns: base::monotonic_ns()). feed() taps the
+// raw bytes (recording), then parser -> pairer -> pool buffer -> PairRing -> next(). Counters are atomics,
+// snapshotted.
 //
 // State machine (frame_source.hpp): starting (start() called) -> streaming (set by the base when
 // run() begins; backends may move to waiting_for_device / stalled and back to streaming) -> finished
@@ -49,8 +50,6 @@ class ByteStreamSource : public FrameSource {
   std::optional<std::string> error() const override;
   bool set_raw_tap(RawTap* tap) override;
 
-  static std::int64_t monotonic_ns();  // CLOCK_MONOTONIC, the clock of Frame::host_ns and .neyd chunks
-
  protected:
   virtual void open() {}       // on the caller's thread inside start(); throw SourceError on failure
   virtual void run() = 0;      // the capture thread: return at end of data, or soon after stopping()
@@ -71,10 +70,7 @@ class ByteStreamSource : public FrameSource {
   void fail(std::string message);       // state failed, error() = message
   void set_error(std::string message);  // error() without changing the state
   AtomicCounters& live_counters() { return counters_; }
-  // Sensor time of the last record committed (ns since the stream's first record), for pacing.
-  std::int64_t last_sensor_ns() const { return last_sensor_ns_; }
   std::uint64_t records_committed() const { return records_.load(std::memory_order_relaxed); }
-  const StreamSettings& stream_settings() const { return settings_; }
 
  private:
   class Channel;
@@ -82,7 +78,6 @@ class ByteStreamSource : public FrameSource {
   void thread_main();
 
   SourceInfo info_;
-  StreamSettings settings_;
   AtomicCounters counters_;
   PairPool pool_;
   PairRing ring_;
@@ -96,7 +91,6 @@ class ByteStreamSource : public FrameSource {
   std::atomic<bool> stop_{false};
   std::atomic<bool> started_{false};
   std::atomic<std::uint64_t> records_{0};
-  std::int64_t last_sensor_ns_ = 0;
   mutable std::mutex error_mutex_;
   std::optional<std::string> error_;
   std::mutex sleep_mutex_;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "naneye/base/enum_table.hpp"
 #include "naneye/driver/wire_format.hpp"
 
 namespace naneye::driver {
@@ -16,8 +17,13 @@ enum class ColorMode : std::uint8_t { mono, bayer_grbg };
 // v4l2:// frame is checked only when its URI says `reference=check`).
 enum class ReferenceStatus : std::uint8_t { not_checked, passed, failed };
 
+inline constexpr base::EnumTable<ReferenceStatus, 3> kReferenceStatusNames{
+    {{ReferenceStatus::not_checked, "not_checked"},
+     {ReferenceStatus::passed, "passed"},
+     {ReferenceStatus::failed, "failed"}}};
+
 constexpr const char* to_string(ReferenceStatus r) {
-  return r == ReferenceStatus::passed ? "passed" : r == ReferenceStatus::failed ? "failed" : "not_checked";
+  return base::enum_name(kReferenceStatusNames, r, "not_checked");
 }
 
 struct Frame {

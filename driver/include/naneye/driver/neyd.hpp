@@ -88,7 +88,6 @@ class NeydReader {
   // marker; NeydError for anything else (truncation, bad tag, CRC mismatch, counts).
   bool next(std::vector<std::uint8_t>& data, std::int64_t& host_ns);
   std::uint64_t offset() const { return offset_; }  // bytes consumed so far
-  std::uint64_t chunk_index() const { return chunk_; }
 
  private:
   void read_header();

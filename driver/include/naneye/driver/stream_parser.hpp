@@ -69,7 +69,6 @@ class StreamParser {
   // stream, out of sync.
   void finish(std::int64_t host_ns);
 
-  bool in_sync() const { return in_sync_; }
   const ParserSettings& settings() const { return settings_; }
 
  private:

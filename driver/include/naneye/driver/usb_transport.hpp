@@ -1,9 +1,9 @@
 #pragma once
 // The libusb side of usb://: finds the board, brings it up, keeps a ring of bulk IN transfers in
 // flight on its own event thread and hands every completed transfer's bytes, in arrival order, to a
-// sink. It survives the board going away (waiting_for_device, reconnect with exponential backoff,
-// woken early by hotplug arrivals) and reports stalls. It knows nothing of records: the sink (the
-// stream parser of the usb:// source, or a recorder) does.
+// sink. It survives the board going away (waiting_for_device, reconnect with base::Backoff: its
+// delays, "say why once" logging and counters; woken early by hotplug arrivals) and reports stalls. It knows
+// nothing of records: the sink (the stream parser of the usb:// source, or a recorder) does.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -12,6 +12,7 @@
 #include <span>
 #include <string>
 
+#include "naneye/base/backoff.hpp"
 #include "naneye/driver/frame_source.hpp"
 #include "naneye/driver/usb_profile.hpp"
 
@@ -23,8 +24,7 @@ struct UsbTransportSettings {
   UsbProfile profile;
   std::string serial;  // empty: the first board with the profile's ids
   std::chrono::milliseconds stall_timeout{1000};
-  std::chrono::milliseconds backoff_initial{100};
-  std::chrono::milliseconds backoff_max{5000};
+  base::BackoffSettings backoff;                   // reconnect delays (base/backoff.hpp's defaults)
   std::chrono::milliseconds cancel_timeout{2000};  // shutdown: how long to wait for cancelled transfers
   // In-process bring-up, run after the external bringup_command (if any) and before the claim.
   // Returning false fails the attempt (retried with backoff).

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "naneye/base/backoff.hpp"
 #include "naneye/driver/frame_source.hpp"
 #include "naneye/driver/source_uri.hpp"
 #include "naneye/driver/stream_parser.hpp"
@@ -32,8 +33,7 @@ struct V4l2Settings {
   int buffer_count = 4;
   std::chrono::milliseconds poll_timeout{200};
   std::chrono::milliseconds stall_timeout{1000};
-  std::chrono::milliseconds backoff_initial{100};
-  std::chrono::milliseconds backoff_max{5000};
+  base::BackoffSettings backoff;  // reopen delays (base/backoff.hpp's defaults)
   // alternate layout: a left and a right frame pair when their timestamps differ by at most this
   // (default: half of a 22.7 ms frame period).
   std::chrono::nanoseconds pair_tolerance{11'350'000};

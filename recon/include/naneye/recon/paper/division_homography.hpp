@@ -59,10 +59,4 @@ struct DivisionLambdas {
 DivisionLambdas estimate_division_lambdas(std::span<const PlaneCorrespondences> planes,
                                           const DivisionHomographyOptions& opt = {});
 
-// Symmetric transfer residuals of one plane: for each point, distort'(H x) - x'_d and distort(H^-1 x') - x_d
-// (model units), 4 per point. A point whose transfer has no distorted image gets a residual of 1e3.
-std::vector<double> division_transfer_residuals(const Eigen::Matrix3d& H, double lambda_left,
-                                                double lambda_right, std::span<const Eigen::Vector2d> left,
-                                                std::span<const Eigen::Vector2d> right);
-
 }  // namespace naneye::recon

@@ -1,0 +1,10 @@
+#pragma once
+// The project's one clock for arrival and publication times: CLOCK_MONOTONIC in nanoseconds, the
+// clock of Frame::host_ns, of .neyd chunk times and of every *_ns time the daemon publishes.
+#include <cstdint>
+
+namespace naneye::base {
+
+std::int64_t monotonic_ns();
+
+}  // namespace naneye::base

@@ -1,0 +1,55 @@
+#pragma once
+// RigReload: a new calibration handed from any thread (SIGHUP) to the worker, which applies it
+// between two pairs. HTTP readers see the new rig at once (rig()); the worker swaps in a processor
+// already set to it on the caller's thread (building the new maps never delays a pair), or sets
+// its own. A reload that fails in the processing step gives the processor, and readers, the
+// previous rig back. Each outcome is kept for /v1/status (last, counts).
+//
+// Threads: offer(), refused(), rig() and fill() from any thread; apply_pending() is the worker's and
+// takes the mutex only when a reload is pending.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "naneye/daemon/pipeline_status.hpp"
+#include "naneye/daemon/processor.hpp"
+#include "naneye/recon/camera/rig.hpp"
+
+namespace naneye::daemon {
+
+class RigReload {
+ public:
+  // `rig` is the one the processor starts with; outcomes are stamped in seconds since `started`.
+  RigReload(std::shared_ptr<const recon::StereoRig> rig, std::chrono::steady_clock::time_point started);
+
+  // `prepared` (may be null) is a processor already set to `rig`; an earlier offer not yet taken is
+  // replaced: the newest wins.
+  void offer(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared);
+  // A reload refused before reaching the pipeline (or by the processing step); the rig in use stays.
+  void refused(std::string reason);
+  std::shared_ptr<const recon::StereoRig> rig() const;
+
+  // Worker, between two pairs: applies a pending reload to `processor` (whose name() is `name`).
+  void apply_pending(std::unique_ptr<PairProcessor>& processor, std::string_view name);
+  // calibration_reloads, calibration_reload_failures, last_reload.
+  void fill(PipelineStatus& s) const;
+
+ private:
+  double uptime_s() const;
+
+  std::chrono::steady_clock::time_point started_;
+  mutable std::mutex mu_;  // HTTP readers and reloads only; the worker takes it once per reload
+  std::shared_ptr<const recon::StereoRig> rig_;
+  std::unique_ptr<PairProcessor> prepared_;  // guarded by mu_: offer()'s, for the worker to take
+  std::atomic<bool> pending_{false};
+  std::shared_ptr<const recon::StereoRig> applied_;  // worker only: the rig the processor has
+  mutable std::mutex outcome_mu_;                    // guards last_ (a reload's outcome, rare)
+  std::optional<PipelineStatus::Reload> last_;
+  std::atomic<std::uint64_t> reloads_{0}, failures_{0};
+};
+
+}  // namespace naneye::daemon
