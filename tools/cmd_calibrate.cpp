@@ -23,8 +23,9 @@ namespace {
 
 struct CalibrateOptions {
   std::vector<std::string> inputs;
-  std::string pattern = "6x8";
-  double square_mm = 5.99;
+  // Defaults: the paper's board, as recon::BoardGeometry states it.
+  std::string pattern = pattern_text(recon::BoardGeometry{});
+  double square_mm = recon::BoardGeometry{}.square_mm;
   std::string output;
   std::vector<std::string> guess;
   bool fix_k3 = false, tangential = false, cross_validate = false, json = false;
@@ -71,9 +72,10 @@ void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& 
 }
 
 void run_calibrate(const CalibrateOptions& o) {
+  const recon::BoardGeometry board = parse_board(o.pattern, o.square_mm);
   recon::CornerSettings corners;
-  parse_pattern(o.pattern, corners.rows, corners.cols);
-  const recon::BoardGeometry board{corners.rows, corners.cols, o.square_mm};
+  corners.rows = board.rows;
+  corners.cols = board.cols;
   std::vector<std::filesystem::path> guess_files(o.guess.begin(), o.guess.end());
   if (guess_files.empty()) guess_files.push_back(sim::find_calibration("paper-d3.yaml"));
   const recon::StereoRig guess = recon::load_rig(guess_files);

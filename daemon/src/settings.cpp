@@ -60,6 +60,7 @@ using Setter = std::function<void(const toml::node&, const std::string& key)>;
 
 // Every accepted key and how it lands in Settings; anything else is refused by name.
 std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& base) {
+  recon::StereoReconstructorSettings* r = &s.processor.reconstructor;  // captured by value below
   auto integer = [](int& field, std::int64_t lo, std::int64_t hi) {
     return [&field, lo, hi](const toml::node& n, const std::string& key) {
       field = static_cast<int>(get_int(n, key, lo, hi));
@@ -103,25 +104,30 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
          s.http_tls_key = resolve(base, get_string(n, k));
        }},
       {"pipeline.corner_sigma_px",
-       [&s](const toml::node& n, const std::string& k) { s.corner_sigma_px = get_double(n, k, 1e-4, 10.0); }},
+       [r](const toml::node& n, const std::string& k) {
+         r->reconstruction.corner_sigma_px = get_double(n, k, 1e-4, 10.0);
+       }},
       {"pipeline.max_result_age_ms", integer(s.max_result_age_ms, 1, 3'600'000)},
-      {"board.rows", integer(s.board_rows, 2, 8)},
-      {"board.cols", integer(s.board_cols, 2, 8)},
+      // The board's grid is the detector's, its square size the reconstruction's (recon's structs).
+      {"board.rows", integer(r->corners.rows, 2, 8)},
+      {"board.cols", integer(r->corners.cols, 2, 8)},
       {"board.square_mm",
-       [&s](const toml::node& n, const std::string& k) { s.square_mm = get_double(n, k, 0.01, 1000.0); }},
-      {"board.tracking", [&s](const toml::node& n, const std::string& k) { s.tracking = get_bool(n, k); }},
-      {"board.detect", [&s](const toml::node& n, const std::string& k) { s.detect = get_bool(n, k); }},
+       [r](const toml::node& n, const std::string& k) {
+         r->reconstruction.board.square_mm = get_double(n, k, 0.01, 1000.0);
+       }},
+      {"board.tracking", [r](const toml::node& n, const std::string& k) { r->tracking = get_bool(n, k); }},
+      {"board.detect",
+       [&s](const toml::node& n, const std::string& k) { s.processor.detect = get_bool(n, k); }},
       {"recon.mode",
        [&s](const toml::node& n, const std::string& k) {
          const auto v = get_string(n, k);
-         if (v == "board")
-           s.recon_mode = ReconMode::board;
-         else if (v == "scene")
-           s.recon_mode = ReconMode::scene;
-         else if (v == "both")
-           s.recon_mode = ReconMode::both;
-         else
-           fail(k, "expected one of board, scene, both, got \"" + v + "\"");
+         for (const auto m : {ReconMode::board, ReconMode::scene, ReconMode::both}) {
+           if (v == app::to_string(m)) {
+             s.processor.mode = m;
+             return;
+           }
+         }
+         fail(k, "expected one of board, scene, both, got \"" + v + "\"");
        }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
@@ -156,18 +162,6 @@ void apply(const toml::table& table, const std::string& prefix, std::map<std::st
 }
 
 }  // namespace
-
-const char* to_string(ReconMode m) {
-  switch (m) {
-    case ReconMode::board:
-      return "board";
-    case ReconMode::scene:
-      return "scene";
-    case ReconMode::both:
-      return "both";
-  }
-  return "unknown";
-}
 
 Settings parse_settings(const std::string& toml_text, const std::filesystem::path& base_dir) {
   toml::table table;

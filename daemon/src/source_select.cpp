@@ -1,5 +1,7 @@
 #include "naneye/daemon/source_select.hpp"
 
+#include <memory>
+
 namespace naneye::daemon {
 
 SourceChoice choose_source(const Settings& settings, const BoardLister& boards) {
@@ -20,6 +22,11 @@ SourceChoice choose_source(const Settings& settings, const BoardLister& boards) 
           "auto: no NanEye readout board attached; replaying the bundled sample capture " +
               settings.sample_capture.string() + " in a loop at real time",
           true};
+}
+
+SourceFactory driver_source_factory() {
+  auto registry = std::make_shared<driver::SourceRegistry>(app::make_source_registry());
+  return [registry](const std::string& uri) { return registry->open(uri); };
 }
 
 }  // namespace naneye::daemon

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "capture.hpp"
+#include "naneye/app/processor.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
@@ -29,12 +30,13 @@ TEST(Pipeline, PublishesEveryPairOfALosslessReplayWhileReadersRead) {
   const int n = 60;
   const auto truth = write_capture(dir.path / "c.raw", n);
   daemon::Settings settings;
-  settings.detect = false;  // the hand-over and publication are under test, on frames without a board
+  settings.processor.detect =
+      false;  // the hand-over and publication are under test, on frames without a board
   settings.history = 128;
   settings.frame_snapshot_interval_ms = 0;  // every pair: the most contention on the frame slots
-  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
-                            {"file://" + (dir.path / "c.raw").string() + "?speed=max", "test", false},
-                            paper_rig());
+  daemon::Pipeline pipeline(
+      settings, app::make_processor(settings.processor), daemon::driver_source_factory(),
+      {"file://" + (dir.path / "c.raw").string() + "?speed=max", "test", false}, paper_rig());
   std::atomic<bool> done{false};
   std::atomic<int> bad{0}, reads{0};
   auto reader = [&] {
@@ -91,9 +93,10 @@ TEST(Pipeline, ReloadsTheRigBetweenPairs) {
   TempDir dir;
   write_capture(dir.path / "c.raw", 20);
   daemon::Settings settings;
-  settings.detect = false;  // the hand-over and publication are under test, on frames without a board
+  settings.processor.detect =
+      false;  // the hand-over and publication are under test, on frames without a board
   daemon::Pipeline pipeline(
-      settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+      settings, app::make_processor(settings.processor), daemon::driver_source_factory(),
       {"file://" + (dir.path / "c.raw").string() + "?speed=realtime&loop=1", "test", false}, paper_rig());
   pipeline.start();
   auto other = std::make_shared<recon::StereoRig>(*paper_rig());
@@ -117,10 +120,10 @@ TEST(Pipeline, SceneResultsAndTheirMapsBelongToTheirPair) {
   const int n = 3;
   write_scene_capture(dir.path / "s.raw", n);
   daemon::Settings settings;
-  settings.recon_mode = daemon::ReconMode::both;
-  daemon::Pipeline pipeline(settings, daemon::make_processor(settings), daemon::driver_source_factory(),
-                            {"file://" + (dir.path / "s.raw").string() + "?speed=max", "test", false},
-                            paper_rig());
+  settings.processor.mode = app::ReconMode::both;
+  daemon::Pipeline pipeline(
+      settings, app::make_processor(settings.processor), daemon::driver_source_factory(),
+      {"file://" + (dir.path / "s.raw").string() + "?speed=max", "test", false}, paper_rig());
   std::atomic<bool> done{false};
   std::atomic<int> bad{0}, with_scene{0}, with_map{0};
   auto reader = [&] {

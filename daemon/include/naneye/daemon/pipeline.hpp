@@ -13,9 +13,9 @@
 #include <string>
 #include <thread>
 
+#include "naneye/app/processor.hpp"
 #include "naneye/daemon/latency.hpp"
 #include "naneye/daemon/pinned_slots.hpp"
-#include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/settings.hpp"
 #include "naneye/driver/frame_source.hpp"
 #include "naneye/recon/camera/rig.hpp"

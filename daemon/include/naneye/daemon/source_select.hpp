@@ -6,24 +6,19 @@
 #include <string>
 #include <vector>
 
-#include "naneye/driver/source_registry.hpp"
-
+#include "naneye/app/sources.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/settings.hpp"
 
 namespace naneye::daemon {
 
-// URIs of the attached readout boards, first one first.
+// URIs of the attached readout boards, first one first (app::attached_boards in naneyed).
 using BoardLister = std::function<std::vector<std::string>()>;
 
 // Throws SettingsError (naming source.sample_capture) when "auto" finds neither.
 SourceChoice choose_source(const Settings& settings, const BoardLister& boards);
 
-// The driver's registry: opens usb://, v4l2://, file://, sim:// URIs.
-// Every scheme a source URI may name: the driver's (usb, v4l2, file) and the simulator's sim://.
-driver::SourceRegistry make_source_registry();
+// The pipeline's factory over app::make_source_registry() (every scheme, sim:// included).
 SourceFactory driver_source_factory();
-// Attached boards as the driver enumerates them (empty when the driver cannot enumerate).
-std::vector<std::string> attached_boards();
 
 }  // namespace naneye::daemon

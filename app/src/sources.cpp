@@ -1,22 +1,17 @@
+#include "naneye/app/sources.hpp"
+
 #include <spdlog/spdlog.h>
 
-#include "naneye/daemon/source_select.hpp"
 #include "naneye/driver/device_list.hpp"
-#include "naneye/driver/source_registry.hpp"
 #include "naneye/driver/usb_profile.hpp"
 #include "naneye/sim/sim_source.hpp"
 
-namespace naneye::daemon {
+namespace naneye::app {
 
 driver::SourceRegistry make_source_registry() {
   driver::SourceRegistry registry = driver::make_default_registry();
   sim::register_sim_source(registry);  // sim://: rendered live, for demos without a camera
   return registry;
-}
-
-SourceFactory driver_source_factory() {
-  auto registry = std::make_shared<driver::SourceRegistry>(make_source_registry());
-  return [registry](const std::string& uri) { return registry->open(uri); };
 }
 
 std::vector<std::string> attached_boards() {
@@ -38,4 +33,4 @@ std::vector<std::string> attached_boards() {
   return uris;
 }
 
-}  // namespace naneye::daemon
+}  // namespace naneye::app

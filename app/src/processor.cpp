@@ -1,14 +1,26 @@
-#include "naneye/daemon/processor.hpp"
+#include "naneye/app/processor.hpp"
 
 #include <opencv2/core/utility.hpp>
 #include <optional>
 
-#include "naneye/recon/scene/dense.hpp"
-#include "naneye/recon/scene/scene_json.hpp"
-#include "naneye/recon/scene/sparse.hpp"
+#include "naneye/app/scene_json.hpp"
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
+#include "naneye/recon/scene/dense.hpp"
+#include "naneye/recon/scene/sparse.hpp"
 
-namespace naneye::daemon {
+namespace naneye::app {
+
+const char* to_string(ReconMode m) {
+  switch (m) {
+    case ReconMode::board:
+      return "board";
+    case ReconMode::scene:
+      return "scene";
+    case ReconMode::both:
+      return "both";
+  }
+  return "unknown";
+}
 
 void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out) {
   out.pair = pair.index;
@@ -31,16 +43,6 @@ recon::RawImageView image_view(const driver::Frame& f) {
   return v;
 }
 
-recon::StereoReconstructorSettings reconstructor_settings(const Settings& s) {
-  recon::StereoReconstructorSettings r;
-  r.corners.rows = s.board_rows;
-  r.corners.cols = s.board_cols;
-  r.reconstruction.board.square_mm = s.square_mm;
-  r.reconstruction.corner_sigma_px = s.corner_sigma_px;
-  r.tracking = s.tracking;
-  return r;
-}
-
 namespace {
 
 // board.detect = false: every pair is published with its timing and frames, and no board.
@@ -58,22 +60,20 @@ class TimingOnly final : public PairProcessor {
 // Board and scene run on the same pair; the scene's two paths share one luminance.
 class Reconstruction final : public PairProcessor {
  public:
-  explicit Reconstruction(const Settings& s)
-      : settings_(reconstructor_settings(s)),
-        board_wanted_(s.recon_mode != ReconMode::scene),
-        scene_wanted_(s.recon_mode != ReconMode::board) {}
+  explicit Reconstruction(const ProcessorSettings& s)
+      : settings_(s), board_wanted_(s.mode != ReconMode::scene), scene_wanted_(s.mode != ReconMode::board) {}
 
   void set_rig(const recon::StereoRig& rig) override {
     if (board_wanted_) {
       if (board_)
         board_->set_rig(rig);
       else
-        board_.emplace(rig, settings_);
+        board_.emplace(rig, settings_.reconstructor);
     }
     // Built anew (its masks and rays depend on the rig): on a reload this runs on the caller's
     // thread (Pipeline::reload), never between two pairs of the worker.
     if (scene_wanted_) {
-      sparse_.emplace(rig, sparse_settings_);
+      sparse_.emplace(rig, settings_.sparse);
       dense_.emplace(rig);
       map_pixels_ = static_cast<std::size_t>(rig.left.width()) * static_cast<std::size_t>(rig.left.height());
     }
@@ -94,14 +94,14 @@ class Reconstruction final : public PairProcessor {
     if (dense_ && depth) {
       dense_->reconstruct(sparse_->luma(), *depth);
       scene.dense = true;
-      scene.depth = recon::scene::summarize(*depth);
+      scene.depth = summarize(*depth);
     }
   }
   bool scene() const override { return scene_wanted_; }
   bool dense() const override { return scene_wanted_; }
   void reserve(SceneResult& scene, recon::scene::DepthMap* depth) const override {
     if (!scene_wanted_) return;
-    scene.sparse.points.reserve(static_cast<std::size_t>(sparse_settings_.max_features));
+    scene.sparse.points.reserve(static_cast<std::size_t>(settings_.sparse.max_features));
     if (depth) {
       depth->z_mm.reserve(map_pixels_);
       depth->sigma_mm.reserve(map_pixels_);
@@ -114,8 +114,7 @@ class Reconstruction final : public PairProcessor {
   }
 
  private:
-  recon::StereoReconstructorSettings settings_;
-  recon::scene::SparseSettings sparse_settings_;
+  ProcessorSettings settings_;
   bool board_wanted_, scene_wanted_;
   std::optional<recon::StereoReconstructor> board_;
   std::optional<recon::scene::SparseReconstructor> sparse_;
@@ -125,7 +124,7 @@ class Reconstruction final : public PairProcessor {
 
 }  // namespace
 
-std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
+std::unique_ptr<PairProcessor> make_processor(const ProcessorSettings& settings) {
   if (!settings.detect) return std::make_unique<TimingOnly>();
   // The per-pair step is written for one core. OpenCV's own thread pool (TBB workers that spin while
   // idle) only takes the other core from the capture and HTTP threads: measured, it tripled naneyed's
@@ -134,4 +133,4 @@ std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
   return std::make_unique<Reconstruction>(settings);
 }
 
-}  // namespace naneye::daemon
+}  // namespace naneye::app
