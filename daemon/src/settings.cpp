@@ -176,6 +176,8 @@ Settings parse_settings(const std::string& toml_text, const std::filesystem::pat
   Settings s;
   auto known = setters(s, base_dir);
   apply(table, "", known);
+  // The step's own rules (the files and cross-section rules wait for validate(): flags may override).
+  if (auto why = s.processor.check(); !why.empty()) throw SettingsError(why);
   return s;
 }
 
@@ -210,30 +212,34 @@ void parse_listen(const std::string& value, const std::string& key, std::string&
   port = parsed;
 }
 
-void validate(const Settings& s) {
-  if (s.source_uri.empty()) fail("source.uri", "must not be empty");
-  if (s.calibration.empty()) fail("calibration.path", "is required");
-  for (const auto& f : s.calibration) {
-    if (!std::filesystem::is_regular_file(f)) fail("calibration.path", "no such file: " + f.string());
-  }
-  if (s.source_uri == "auto" && !s.sample_capture.empty() &&
-      !std::filesystem::is_regular_file(s.sample_capture)) {
-    fail("source.sample_capture", "no such file: " + s.sample_capture.string());
-  }
-  if (s.http_host.empty()) fail("http.host", "must not be empty");
-  if (!s.http_token_file.empty() && !std::filesystem::is_regular_file(s.http_token_file))
-    fail("http.token_file", "no such file: " + s.http_token_file.string());
-  if (s.http_tls_cert.empty() != s.http_tls_key.empty())
-    fail(s.http_tls_cert.empty() ? "http.tls_cert" : "http.tls_key",
-         "http.tls_cert and http.tls_key go together");
+std::string Settings::check() const {
+  const auto no_file = [](const std::filesystem::path& f) { return !std::filesystem::is_regular_file(f); };
+  const auto problem = [](const std::string& key, const std::string& what) { return key + ": " + what; };
+  if (source_uri.empty()) return problem("source.uri", "must not be empty");
+  if (calibration.empty()) return problem("calibration.path", "is required");
+  for (const auto& f : calibration)
+    if (no_file(f)) return problem("calibration.path", "no such file: " + f.string());
+  if (source_uri == "auto" && !sample_capture.empty() && no_file(sample_capture))
+    return problem("source.sample_capture", "no such file: " + sample_capture.string());
+  if (http_host.empty()) return problem("http.host", "must not be empty");
+  if (!http_token_file.empty() && no_file(http_token_file))
+    return problem("http.token_file", "no such file: " + http_token_file.string());
+  if (http_tls_cert.empty() != http_tls_key.empty())
+    return problem(http_tls_cert.empty() ? "http.tls_cert" : "http.tls_key",
+                   "http.tls_cert and http.tls_key go together");
   for (const auto& [key, f] :
-       {std::pair{"http.tls_cert", &s.http_tls_cert}, std::pair{"http.tls_key", &s.http_tls_key}})
-    if (!f->empty() && !std::filesystem::is_regular_file(*f)) fail(key, "no such file: " + f->string());
-  if (s.sse_max_clients >= s.http_threads) {
-    fail("pipeline.sse_max_clients", "must be below http.threads (each event stream holds a thread), got " +
-                                         std::to_string(s.sse_max_clients) +
-                                         " >= " + std::to_string(s.http_threads));
+       {std::pair{"http.tls_cert", &http_tls_cert}, std::pair{"http.tls_key", &http_tls_key}})
+    if (!f->empty() && no_file(*f)) return problem(key, "no such file: " + f->string());
+  if (sse_max_clients >= http_threads) {
+    return problem("pipeline.sse_max_clients",
+                   "must be below http.threads (each event stream holds a thread), got " +
+                       std::to_string(sse_max_clients) + " >= " + std::to_string(http_threads));
   }
+  return processor.check();
+}
+
+void validate(const Settings& s) {
+  if (auto why = s.check(); !why.empty()) throw SettingsError(why);
 }
 
 }  // namespace naneye::daemon

@@ -169,3 +169,15 @@ TEST(Settings, TheBoardKeysLandInTheReconStructs) {
   EXPECT_FALSE(s.processor.detect);
   EXPECT_NE(error_of("[board]\nrows = 9\n").find("board.rows: must be in 2..8"), std::string::npos);
 }
+
+TEST(Settings, CheckNamesTheKeyAndRunsTheProcessorsCheck) {
+  Settings s;
+  s.calibration = {std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml"};
+  EXPECT_EQ(s.check(), "");
+  s.http_host.clear();
+  EXPECT_EQ(s.check(), "http.host: must not be empty");
+  s.http_host = "127.0.0.1";
+  s.processor.reconstructor.reconstruction.board.square_mm = -1;
+  EXPECT_EQ(s.check().rfind("board.square_mm: ", 0), 0u) << s.check();
+  EXPECT_THROW(validate(s), SettingsError);
+}

@@ -33,6 +33,9 @@ struct ProcessorSettings {
   // tracking; [pipeline] corner_sigma_px (reconstruction.corner_sigma_px).
   recon::StereoReconstructorSettings reconstructor;
   recon::scene::SparseSettings sparse;
+
+  // Empty when usable, otherwise what is wrong, naming naneyed's key ("board.rows: ...").
+  std::string check() const;
 };
 
 class PairProcessor {

@@ -50,6 +50,10 @@ struct Settings {
   // board's grid, square size and tracking, whether to detect at all, board/scene/both), with the
   // recon structs' defaults (the paper's board: 6 x 8 inner corners of 5.99 mm).
   app::ProcessorSettings processor;
+
+  // Empty when usable, otherwise the first problem, naming the key ("calibration.path: is required"):
+  // each section's rules, the cross-field ones, the referenced files, then processor.check().
+  std::string check() const;
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error, critical, off
 };
@@ -69,7 +73,7 @@ Settings parse_settings(const std::string& toml_text, const std::filesystem::pat
 // "HOST:PORT" (or "[v6]:PORT") -> host and port; throws SettingsError naming `key`.
 void parse_listen(const std::string& value, const std::string& key, std::string& host, int& port);
 
-// Checks cross-field rules and that the referenced files exist; throws SettingsError.
+// Throws SettingsError with s.check()'s problem, if any.
 void validate(const Settings& s);
 
 }  // namespace naneye::daemon

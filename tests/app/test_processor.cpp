@@ -1,0 +1,37 @@
+// The processing step's settings: the recon structs' own defaults and a check() that names naneyed's
+// key.
+#include <gtest/gtest.h>
+
+#include "naneye/app/processor.hpp"
+
+using namespace naneye;
+
+TEST(Processor, SettingsDefaultToReconsAndCheckNamesTheKey) {
+  const app::ProcessorSettings defaults;
+  const recon::BoardGeometry paper;
+  EXPECT_EQ(defaults.reconstructor.corners.rows, paper.rows);
+  EXPECT_EQ(defaults.reconstructor.corners.cols, paper.cols);
+  EXPECT_DOUBLE_EQ(defaults.reconstructor.reconstruction.board.square_mm, paper.square_mm);
+  EXPECT_TRUE(defaults.detect);
+  EXPECT_EQ(defaults.mode, app::ReconMode::board);
+  EXPECT_EQ(defaults.check(), "");
+
+  auto s = defaults;
+  s.reconstructor.corners.rows = 1;
+  EXPECT_EQ(s.check().rfind("board.rows and cols: ", 0), 0u) << s.check();
+  s = defaults;
+  s.reconstructor.corners.rows = 9;
+  EXPECT_EQ(s.check().rfind("board.rows, board.cols: at most 64", 0), 0u) << s.check();
+  s = defaults;
+  s.reconstructor.reconstruction.board.square_mm = 0;
+  EXPECT_EQ(s.check().rfind("board.square_mm: ", 0), 0u) << s.check();
+  s = defaults;
+  s.reconstructor.reconstruction.corner_sigma_px = 0;
+  EXPECT_EQ(s.check().rfind("pipeline.corner_sigma_px: ", 0), 0u) << s.check();
+}
+
+TEST(Processor, ReconModeNamesRoundTrip) {
+  EXPECT_STREQ(app::to_string(app::ReconMode::board), "board");
+  EXPECT_STREQ(app::to_string(app::ReconMode::scene), "scene");
+  EXPECT_STREQ(app::to_string(app::ReconMode::both), "both");
+}
