@@ -70,13 +70,31 @@ class TimingOnly final : public PairProcessor {
   std::string_view name() const override { return "timing only (board.detect = false)"; }
 };
 
+// How the board's corners are triangulated, in the words of the status line.
+std::string method_text(recon::TriangulationMethod m) {
+  if (m == recon::TriangulationMethod::refined) return "niter2 + refinement";
+  return recon::to_string(m);
+}
+
+// What the step does, for the log and /v1/status: the board's triangulation as configured.
+std::string step_name(const ProcessorSettings& s) {
+  if (s.mode == ReconMode::board)
+    return "board reconstruction (corners, " + method_text(s.reconstructor.reconstruction.method) +
+           ", board pose)";
+  if (s.mode == ReconMode::scene) return "scene reconstruction (sparse features, dense depth map)";
+  return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
+}
+
 // The product's processing step: the board (issue #5: both eyes' corners, triangulation, board
 // pose, P/D/R) and/or the textured scene (issue 14: sparse points, the dense map), per [recon] mode.
 // Board and scene run on the same pair; the scene's two paths share one luminance.
 class Reconstruction final : public PairProcessor {
  public:
   explicit Reconstruction(const ProcessorSettings& s)
-      : settings_(s), board_wanted_(s.mode != ReconMode::scene), scene_wanted_(s.mode != ReconMode::board) {}
+      : settings_(s),
+        name_(step_name(s)),
+        board_wanted_(s.mode != ReconMode::scene),
+        scene_wanted_(s.mode != ReconMode::board) {}
 
   void set_rig(const recon::StereoRig& rig) override {
     if (board_wanted_) {
@@ -122,14 +140,11 @@ class Reconstruction final : public PairProcessor {
       depth->sigma_mm.reserve(map_pixels_);
     }
   }
-  std::string_view name() const override {
-    if (!scene_wanted_) return "board reconstruction (corners, niter2 + refinement, board pose)";
-    if (!board_wanted_) return "scene reconstruction (sparse features, dense depth map)";
-    return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
-  }
+  std::string_view name() const override { return name_; }
 
  private:
   ProcessorSettings settings_;
+  std::string name_;
   bool board_wanted_, scene_wanted_;
   std::optional<recon::StereoReconstructor> board_;
   std::optional<recon::scene::SparseReconstructor> sparse_;

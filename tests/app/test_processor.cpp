@@ -1,10 +1,33 @@
-// The processing step's settings: the recon structs' own defaults and a check() that names naneyed's
-// key.
+// The processing step's settings and what it says of itself: the recon structs' own defaults, a
+// check() that names naneyed's key, and a name that reports the triangulation configured.
 #include <gtest/gtest.h>
 
 #include "naneye/app/processor.hpp"
 
 using namespace naneye;
+
+namespace {
+
+std::string name_of(const app::ProcessorSettings& s) {
+  return std::string(app::make_processor(s)->name());
+}
+
+}  // namespace
+
+TEST(Processor, NameReportsTheConfiguredTriangulation) {
+  app::ProcessorSettings s;
+  EXPECT_EQ(name_of(s), "board reconstruction (corners, niter2 + refinement, board pose)");  // the default
+  s.reconstructor.reconstruction.method = recon::TriangulationMethod::dlt;
+  EXPECT_EQ(name_of(s), "board reconstruction (corners, dlt, board pose)");
+  s.reconstructor.reconstruction.method = recon::TriangulationMethod::niter2;
+  EXPECT_EQ(name_of(s), "board reconstruction (corners, niter2, board pose)");
+  s.reconstructor.reconstruction.method = recon::TriangulationMethod::midpoint;
+  EXPECT_EQ(name_of(s), "board reconstruction (corners, midpoint, board pose)");
+  s.mode = app::ReconMode::scene;
+  EXPECT_EQ(name_of(s), "scene reconstruction (sparse features, dense depth map)");
+  s.detect = false;
+  EXPECT_EQ(name_of(s), "timing only (board.detect = false)");
+}
 
 TEST(Processor, SettingsDefaultToReconsAndCheckNamesTheKey) {
   const app::ProcessorSettings defaults;
