@@ -1,10 +1,8 @@
 #pragma once
 // From settings.source_uri to the URI the pipeline opens. "auto" picks the first attached NanEye
 // readout board and, without one, the bundled sample capture (looping real-time replay), and says
-// which and why.
+// which and why (device profiles that were skipped included: the reason shows in /v1/status).
 #include <functional>
-#include <string>
-#include <vector>
 
 #include "naneye/app/sources.hpp"
 #include "naneye/daemon/pipeline.hpp"
@@ -12,8 +10,8 @@
 
 namespace naneye::daemon {
 
-// URIs of the attached readout boards, first one first (app::attached_boards in naneyed).
-using BoardLister = std::function<std::vector<std::string>()>;
+// The attached readout boards (app::attached_boards in naneyed).
+using BoardLister = std::function<app::BoardScan()>;
 
 // Throws SettingsError (naming source.sample_capture) when "auto" finds neither.
 SourceChoice choose_source(const Settings& settings, const BoardLister& boards);
