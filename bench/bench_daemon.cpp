@@ -38,9 +38,9 @@
 #include "../tests/daemon/daemon_process.hpp"
 #include "../tests/daemon/temp_dir.hpp"
 #include "http_load.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/result_json.hpp"
 #include "naneye/daemon/pipeline.hpp"
-#include "naneye/daemon/processor.hpp"
-#include "naneye/daemon/result_json.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "smooth_capture.hpp"
@@ -94,16 +94,16 @@ namespace {
 const std::string kCalib = std::string(NANEYE_SOURCE_DIR) + "/config/calib/paper-d3.yaml";
 
 // The real processing step, unchanged, with the worker thread's slot noted (the first call).
-class TaggingProcessor final : public daemon::PairProcessor {
+class TaggingProcessor final : public app::PairProcessor {
  public:
-  explicit TaggingProcessor(std::unique_ptr<daemon::PairProcessor> inner) : inner_(std::move(inner)) {}
+  explicit TaggingProcessor(std::unique_ptr<app::PairProcessor> inner) : inner_(std::move(inner)) {}
   void set_rig(const recon::StereoRig& rig) override { inner_->set_rig(rig); }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
     worker_slot.store(thread_slot(), std::memory_order_relaxed);
     inner_->process(pair, out);
     found += out.board_found;
   }
-  void process_pair(const driver::StereoPair& pair, recon::PairResult& out, daemon::SceneResult& scene,
+  void process_pair(const driver::StereoPair& pair, recon::PairResult& out, app::SceneResult& scene,
                     recon::scene::DepthMap* depth) override {
     worker_slot.store(thread_slot(), std::memory_order_relaxed);
     inner_->process_pair(pair, out, scene, depth);
@@ -112,7 +112,7 @@ class TaggingProcessor final : public daemon::PairProcessor {
   }
   bool scene() const override { return inner_->scene(); }
   bool dense() const override { return inner_->dense(); }
-  void reserve(daemon::SceneResult& scene, recon::scene::DepthMap* depth) const override {
+  void reserve(app::SceneResult& scene, recon::scene::DepthMap* depth) const override {
     inner_->reserve(scene, depth);
   }
   std::string_view name() const override { return inner_->name(); }
@@ -121,7 +121,7 @@ class TaggingProcessor final : public daemon::PairProcessor {
   std::atomic<int> found{0};
 
  private:
-  std::unique_ptr<daemon::PairProcessor> inner_;
+  std::unique_ptr<app::PairProcessor> inner_;
 };
 
 std::array<std::uint64_t, kSlots> slot_counts() {
@@ -131,12 +131,12 @@ std::array<std::uint64_t, kSlots> slot_counts() {
 }
 
 void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool detect,
-                           daemon::ReconMode mode = daemon::ReconMode::board, const char* what = nullptr) {
+                           app::ReconMode mode = app::ReconMode::board, const char* what = nullptr) {
   daemon::Settings settings;
   settings.history = 64;
-  settings.detect = detect;
-  settings.recon_mode = mode;
-  auto tagging = std::make_unique<TaggingProcessor>(daemon::make_processor(settings));
+  settings.processor.detect = detect;
+  settings.processor.mode = mode;
+  auto tagging = std::make_unique<TaggingProcessor>(app::make_processor(settings.processor));
   TaggingProcessor& tag = *tagging;
   daemon::Pipeline pipeline(settings, std::move(tagging), daemon::driver_source_factory(),
                             {"file://" + capture.string() + "?speed=max", "bench", false},
@@ -196,7 +196,7 @@ void serialization_cost() {
   const int reps = 2000;
   std::size_t bytes = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < reps; ++k) bytes += daemon::result_to_json(r).dump().size();
+  for (int k = 0; k < reps; ++k) bytes += app::result_to_json(r).dump().size();
   const double us =
       std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / reps;
   std::printf(
@@ -255,12 +255,12 @@ double metric(httplib::Client& c, const std::string& name) {
 }
 
 void service_figures(const std::filesystem::path& dir, const std::filesystem::path& capture, double seconds,
-                     int connections, bool detect, daemon::ReconMode mode = daemon::ReconMode::board,
+                     int connections, bool detect, app::ReconMode mode = app::ReconMode::board,
                      const char* what = nullptr) {
   const auto log = dir / "naneyed.log";
   const auto config = dir / "naneyed.toml";
   std::ofstream(config) << "[board]\ndetect = " << (detect ? "true" : "false") << "\n[recon]\nmode = \""
-                        << daemon::to_string(mode) << "\"\n";
+                        << app::to_string(mode) << "\"\n";
   std::printf("-- naneyed, %s\n", what     ? what
                                   : detect ? "board reconstruction (the real processing step)"
                                            : "timing only (board.detect = false)");
@@ -382,14 +382,14 @@ int main(int argc, char** argv) {
       scene_pairs);
   allocations_per_frame(capture, pairs, true);
   allocations_per_frame(capture, pairs, false);
-  allocations_per_frame(scene_capture, std::min(scene_pairs, 60), true, daemon::ReconMode::both,
+  allocations_per_frame(scene_capture, std::min(scene_pairs, 60), true, app::ReconMode::both,
                         "in-process Pipeline, board + scene:");
   serialization_cost();
   service_figures(dir.path, capture, seconds, connections, true);
   service_figures(dir.path, capture, seconds, connections, false);
-  service_figures(dir.path, scene_capture, seconds, connections, true, daemon::ReconMode::both,
+  service_figures(dir.path, scene_capture, seconds, connections, true, app::ReconMode::both,
                   "board + scene ([recon] mode = \"both\") on the textured sphere");
-  service_figures(dir.path, capture, seconds, connections, true, daemon::ReconMode::both,
+  service_figures(dir.path, capture, seconds, connections, true, app::ReconMode::both,
                   "board + scene ([recon] mode = \"both\") on the board capture");
   return 0;
 }

@@ -12,8 +12,8 @@
 #include <stdexcept>
 
 #include "cli_inputs.hpp"
-#include "naneye/daemon/processor.hpp"
-#include "naneye/daemon/source_select.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/sources.hpp"
 #include "naneye/recon/corners/stereo_ids.hpp"
 
 namespace naneye::tools {
@@ -93,7 +93,7 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
   CollectedViews out;
   recon::CornerDetector detect_left(guess.left, corners), detect_right(guess.right, corners);
   recon::CornerResult left, right;
-  const auto registry = daemon::make_source_registry();
+  const auto registry = app::make_source_registry();
   std::vector<InputUri> uris;
   for (const std::string& input : inputs)
     for (auto& u : expand_input(input)) uris.push_back(std::move(u));
@@ -114,8 +114,8 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
         continue;
       }
       ++out.pairs;
-      const bool l = detect_left.detect_full(daemon::image_view(pair->left), left);
-      const bool r = detect_right.detect_full(daemon::image_view(pair->right), right);
+      const bool l = detect_left.detect_full(app::image_view(pair->left), left);
+      const bool r = detect_right.detect_full(app::image_view(pair->right), right);
       if (l || r) {
         recon::CalibrationView v;
         if (l) v.left = corners_of(left);

@@ -1,5 +1,5 @@
 // `naneye calibrate --input URI [--input URI ...] --pattern 6x8 --square-mm 5.99 -o calib.yaml`: detect the
-// board in every pair, calibrate both cameras and the stereo pose in one bundle (recon/calibrate.hpp),
+// board in every pair, calibrate both cameras and the stereo pose in one bundle (naneye/recon/calibrate/calibrate.hpp),
 // print every parameter with its sigma, and write the calibration YAML that everything else reads.
 // Nothing is written when anything fails.
 #include <spdlog/spdlog.h>
@@ -23,8 +23,9 @@ namespace {
 
 struct CalibrateOptions {
   std::vector<std::string> inputs;
-  std::string pattern = "6x8";
-  double square_mm = 5.99;
+  // Defaults: the paper's board, as recon::BoardGeometry states it.
+  std::string pattern = pattern_text(recon::BoardGeometry{});
+  double square_mm = recon::BoardGeometry{}.square_mm;
   std::string output;
   std::vector<std::string> guess;
   bool fix_k3 = false, tangential = false, cross_validate = false, json = false;
@@ -71,10 +72,9 @@ void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& 
 }
 
 void run_calibrate(const CalibrateOptions& o) {
+  const recon::BoardGeometry board = parse_board(o.pattern, o.square_mm);
   recon::CornerSettings corners;
-  parse_pattern(o.pattern, corners.board.rows, corners.board.cols);
-  corners.board.square_mm = o.square_mm;
-  const recon::BoardGeometry& board = corners.board;
+  corners.board = board;
   std::vector<std::filesystem::path> guess_files(o.guess.begin(), o.guess.end());
   if (guess_files.empty()) guess_files.push_back(sim::find_calibration("paper-d3.yaml"));
   const recon::StereoRig guess = recon::load_rig(guess_files);

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "commands.hpp"
-#include "naneye/daemon/source_select.hpp"
+#include "naneye/app/sources.hpp"
 #include "naneye/driver/recorder.hpp"
 
 namespace naneye::tools {
@@ -63,7 +63,7 @@ struct RecordOptions {
 };
 
 void run_record(const RecordOptions& o) {
-  auto registry = daemon::make_source_registry();
+  auto registry = app::make_source_registry();
   auto source = registry.open(o.uri);
   SignalWatch signals;  // before start(): the capture thread inherits the blocked mask
   const driver::RecordSummary s = driver::record_to_neyd(
@@ -106,7 +106,7 @@ void run_replay(const ReplayOptions& o) {
   // A plain path replays as fast as possible, losslessly; a URI keeps its own parameters.
   const std::string uri =
       o.file.find("://") == std::string::npos ? "file://" + o.file + "?speed=max" : o.file;
-  auto source = daemon::make_source_registry().open(uri);
+  auto source = app::make_source_registry().open(uri);
   source->start();
   Series left, right;
   double off_sum = 0;

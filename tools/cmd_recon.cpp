@@ -1,6 +1,7 @@
 // `naneye recon --calib FILE --input URI [--json]`: one result per stereo pair, in stream order, pairs
 // without a board included. A file is replayed at max speed with a lossless hand-over: no pair is
-// ever dropped. The per-pair step and the JSON are the daemon's own (one code path, one serializer).
+// ever dropped. The per-pair step and the JSON are naneyed's too (naneye_app: one code path, one
+// serializer).
 // `--left L... --right R...` reads image pairs instead (any size, that of the calibration; the
 // images:// reader, driver::read_image): a pair that cannot be read is reported and skipped.
 #include <algorithm>
@@ -20,15 +21,15 @@
 #include "cli_inputs.hpp"
 #include "commands.hpp"
 #include "image_pairs.hpp"
-#include "naneye/daemon/processor.hpp"
-#include "naneye/daemon/result_json.hpp"
-#include "naneye/daemon/source_select.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/result_json.hpp"
+#include "naneye/app/scene_json.hpp"
+#include "naneye/app/sources.hpp"
 #include "naneye/driver/image_file.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/pair/stereo_reconstructor.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
-#include "naneye/recon/pair/stereo_reconstructor.hpp"
-#include "scene_json.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -39,9 +40,10 @@ struct ReconOptions {
   std::vector<std::string> left, right;  // image files (or glob patterns), instead of --input
   std::string color = "mono";
   bool json = false;
-  std::string pattern = "6x8";
-  double square_mm = 5.99;
-  double corner_sigma_px = 0.05;
+  // Defaults: recon's (the paper's board, the reconstruction's corner sigma), as naneyed's.
+  std::string pattern = pattern_text(recon::BoardGeometry{});
+  double square_mm = recon::BoardGeometry{}.square_mm;
+  double corner_sigma_px = recon::ReconstructionSettings{}.corner_sigma_px;
   bool no_tracking = false;
   long long max_pairs = -1;
   bool scene = false;
@@ -70,14 +72,6 @@ void write_depth_pngs(const std::filesystem::path& dir, unsigned long long pair,
   std::snprintf(name, sizeof name, "sigma-%06llu.png", pair);
   if (!cv::imwrite((dir / name).string(), s16))
     throw std::runtime_error("cannot write " + (dir / name).string());
-}
-
-recon::RawImageView frame_view(const driver::Frame& f) {
-  recon::RawImageView v;
-  v.data = f.pixels.data();
-  v.layout =
-      f.color == driver::ColorMode::bayer_grbg ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
-  return v;
 }
 
 void print_scene_line(const recon::scene::SparseResult& s, const recon::scene::DepthMap* d) {
@@ -136,13 +130,13 @@ class Report {
       if (r.failure_right) ++right_reasons_[r.failure_right];
     }
     if (json_) {
-      nlohmann::json j = daemon::result_to_json(r);
+      nlohmann::json j = app::result_to_json(r);
       if (!r.board_found) {
         j["failure"] = {{"outcome", r.failure ? r.failure : "unknown"},
                         {"left", r.failure_left ? r.failure_left : "unknown"},
                         {"right", r.failure_right ? r.failure_right : "unknown"}};
       }
-      if (scene) j["scene"] = scene_to_json(*scene, depth);
+      if (scene) j["scene"] = app::scene_to_json(*scene, depth);
       std::cout << j.dump() << "\n";
     } else {
       print_line(r);
@@ -180,13 +174,14 @@ class Report {
   std::map<std::string, long long> outcomes_, left_reasons_, right_reasons_;
 };
 
-daemon::Settings recon_settings(const ReconOptions& o) {
-  daemon::Settings settings;
-  parse_pattern(o.pattern, settings.board_rows, settings.board_cols);
-  settings.square_mm = o.square_mm;
-  settings.corner_sigma_px = o.corner_sigma_px;
-  settings.tracking = !o.no_tracking;
-  return settings;
+// The flags as the step's settings (what naneyed reads from [board] and [pipeline]).
+app::ProcessorSettings processor_settings(const ReconOptions& o) {
+  app::ProcessorSettings s;
+  recon::StereoReconstructorSettings& r = s.reconstructor;
+  r.corners.board = parse_board(o.pattern, o.square_mm);
+  r.reconstruction.corner_sigma_px = o.corner_sigma_px;
+  r.tracking = !o.no_tracking;
+  return s;
 }
 
 // The scene paths of one pair (--scene, --depth-out), the same for a source and for image files:
@@ -220,9 +215,9 @@ class SceneStep {
 };
 
 void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
-  auto processor = daemon::make_processor(recon_settings(o));
+  auto processor = app::make_processor(processor_settings(o));
   processor->set_rig(rig);
-  auto source = daemon::make_source_registry().open(lossless_input_uri(o.input));
+  auto source = app::make_source_registry().open(lossless_input_uri(o.input));
   source->start();
   auto result = std::make_unique<recon::PairResult>();
   SceneStep scene(o, rig);
@@ -234,7 +229,7 @@ void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
       continue;
     }
     processor->process(*pair, *result);
-    scene.run(frame_view(pair->left), frame_view(pair->right), result->pair);
+    scene.run(app::image_view(pair->left), app::image_view(pair->right), result->pair);
     scene.report(report, *result);
   }
   source->stop();
@@ -249,7 +244,7 @@ void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
   driver::ImageOptions io;
   if (o.color != "mono" && o.color != "grbg") throw std::invalid_argument("--color: mono or grbg");
   io.color = o.color == "grbg" ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
-  recon::StereoReconstructor reconstructor(rig, daemon::reconstructor_settings(recon_settings(o)));
+  recon::StereoReconstructor reconstructor(rig, processor_settings(o).reconstructor);
   SceneStep scene(o, rig);
   auto result = std::make_unique<recon::PairResult>();
   driver::Image10 left, right;

@@ -3,9 +3,9 @@
 #include <sstream>
 
 #include "http_internal.hpp"
+#include "naneye/app/result_json.hpp"
 #include "naneye/base/clock.hpp"
 #include "naneye/daemon/depth_at.hpp"
-#include "naneye/daemon/result_json.hpp"
 
 namespace naneye::daemon::http {
 namespace {

@@ -15,7 +15,7 @@
 #include "http_internal.hpp"
 #include "http_transport.hpp"
 #include "log.hpp"
-#include "naneye/daemon/result_json.hpp"
+#include "naneye/app/result_json.hpp"
 
 namespace naneye::daemon {
 namespace http {
@@ -126,7 +126,7 @@ std::shared_ptr<const std::string> result_json_text(HttpContext& ctx, const Publ
   if (local.text && local.seq == p.seq) return local.text;
   std::lock_guard lock(ctx.result_json_mutex);
   if (!ctx.result_json || ctx.result_json_seq != p.seq) {
-    auto text = std::make_shared<const std::string>(result_to_json(p.result, p.scene).dump());
+    auto text = std::make_shared<const std::string>(app::result_to_json(p.result, p.scene).dump());
     // An event stream behind the latest result does not evict it.
     if (p.seq < ctx.result_json_seq) return text;
     ctx.result_json_seq = p.seq;

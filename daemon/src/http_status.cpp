@@ -104,7 +104,7 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
           {"last_result_age_ms",
            s.last_result_age_ms ? nlohmann::json(*s.last_result_age_ms) : nlohmann::json(nullptr)},
           {"processor", s.processor},
-          {"recon_mode", to_string(ctx.settings.recon_mode)},
+          {"recon_mode", app::to_string(ctx.settings.processor.mode)},
           {"scene", scene_json(s)},
           {"calibration",
            {{"files", calib_files},

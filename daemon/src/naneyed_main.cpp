@@ -12,10 +12,11 @@
 #include <iostream>
 
 #include "log.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/sources.hpp"
 #include "naneye/daemon/config_check.hpp"
 #include "naneye/daemon/http_server.hpp"
 #include "naneye/daemon/pipeline.hpp"
-#include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/rig_check.hpp"
 #include "naneye/daemon/settings.hpp"
 #include "naneye/daemon/source_select.hpp"
@@ -77,7 +78,7 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
           why = *problem;
         } else {
           // The new maps are built here, not on the worker: it only swaps the processor in.
-          auto prepared = daemon::make_processor(settings);
+          auto prepared = app::make_processor(settings.processor);
           prepared->set_rig(*rig);
           pipeline.reload(std::move(rig), std::move(prepared));
         }
@@ -133,7 +134,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (f.check) {
-    const auto problems = daemon::check_config(settings, daemon::make_source_registry());
+    const auto problems = daemon::check_config(settings, app::make_source_registry());
     for (const auto& p : problems) std::cerr << "naneyed: error: " << p << "\n";
     if (!problems.empty()) return 1;
     std::cout << "naneyed: configuration OK (source " << settings.source_uri << ", listen "
@@ -151,9 +152,9 @@ int main(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);
 
   try {
-    const auto choice = daemon::choose_source(settings, daemon::attached_boards);
+    const auto choice = daemon::choose_source(settings, [] { return app::attached_boards(); });
     logger->info("source: {} ({})", choice.uri, choice.reason);
-    auto processor = daemon::make_processor(settings);
+    auto processor = app::make_processor(settings.processor);
     logger->info("processing step: {}", processor->name());
     daemon::Pipeline pipeline(settings, std::move(processor), daemon::driver_source_factory(), choice, rig);
     daemon::HttpServer server(settings, pipeline, NANEYE_VERSION);

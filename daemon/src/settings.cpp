@@ -12,9 +12,6 @@
 namespace naneye::daemon {
 namespace {
 
-constexpr base::EnumTable<ReconMode, 3> kReconModeNames{
-    {{ReconMode::board, "board"}, {ReconMode::scene, "scene"}, {ReconMode::both, "both"}}};
-
 std::string type_name(const toml::node& n) {
   std::ostringstream os;
   os << n.type();
@@ -64,6 +61,7 @@ using Setter = std::function<void(const toml::node&, const std::string& key)>;
 
 // Every accepted key and how it lands in Settings; anything else is refused by name.
 std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& base) {
+  recon::StereoReconstructorSettings* r = &s.processor.reconstructor;  // captured by value below
   auto integer = [](int& field, std::int64_t lo, std::int64_t hi) {
     return [&field, lo, hi](const toml::node& n, const std::string& key) {
       field = static_cast<int>(get_int(n, key, lo, hi));
@@ -107,21 +105,27 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
          s.http_tls_key = resolve(base, get_string(n, k));
        }},
       {"pipeline.corner_sigma_px",
-       [&s](const toml::node& n, const std::string& k) { s.corner_sigma_px = get_double(n, k, 1e-4, 10.0); }},
+       [r](const toml::node& n, const std::string& k) {
+         r->reconstruction.corner_sigma_px = get_double(n, k, 1e-4, 10.0);
+       }},
       {"pipeline.max_result_age_ms", integer(s.max_result_age_ms, 1, 3'600'000)},
-      {"board.rows", integer(s.board_rows, 2, 8)},
-      {"board.cols", integer(s.board_cols, 2, 8)},
+      // The board's grid is the detector's, its square size the reconstruction's (recon's structs).
+      {"board.rows", integer(r->corners.board.rows, 2, 8)},
+      {"board.cols", integer(r->corners.board.cols, 2, 8)},
       {"board.square_mm",
-       [&s](const toml::node& n, const std::string& k) { s.square_mm = get_double(n, k, 0.01, 1000.0); }},
-      {"board.tracking", [&s](const toml::node& n, const std::string& k) { s.tracking = get_bool(n, k); }},
-      {"board.detect", [&s](const toml::node& n, const std::string& k) { s.detect = get_bool(n, k); }},
+       [r](const toml::node& n, const std::string& k) {
+         r->corners.board.square_mm = get_double(n, k, 0.01, 1000.0);
+       }},
+      {"board.tracking", [r](const toml::node& n, const std::string& k) { r->tracking = get_bool(n, k); }},
+      {"board.detect",
+       [&s](const toml::node& n, const std::string& k) { s.processor.detect = get_bool(n, k); }},
       {"recon.mode",
        [&s](const toml::node& n, const std::string& k) {
          const auto v = get_string(n, k);
-         if (const auto m = base::enum_parse(kReconModeNames, v))
-           s.recon_mode = *m;
+         if (const auto m = base::enum_parse(app::kReconModeNames, v))
+           s.processor.mode = *m;
          else
-           fail(k, "expected one of " + base::enum_names(kReconModeNames) + ", got \"" + v + "\"");
+           fail(k, "expected one of " + base::enum_names(app::kReconModeNames) + ", got \"" + v + "\"");
        }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
@@ -157,10 +161,6 @@ void apply(const toml::table& table, const std::string& prefix, std::map<std::st
 
 }  // namespace
 
-const char* to_string(ReconMode m) {
-  return base::enum_name(kReconModeNames, m);
-}
-
 Settings parse_settings(const std::string& toml_text, const std::filesystem::path& base_dir) {
   toml::table table;
   try {
@@ -174,6 +174,8 @@ Settings parse_settings(const std::string& toml_text, const std::filesystem::pat
   Settings s;
   auto known = setters(s, base_dir);
   apply(table, "", known);
+  // The step's own rules (the files and cross-section rules wait for validate(): flags may override).
+  if (auto why = s.processor.check(); !why.empty()) throw SettingsError(why);
   return s;
 }
 
@@ -208,30 +210,34 @@ void parse_listen(const std::string& value, const std::string& key, std::string&
   port = parsed;
 }
 
-void validate(const Settings& s) {
-  if (s.source_uri.empty()) fail("source.uri", "must not be empty");
-  if (s.calibration.empty()) fail("calibration.path", "is required");
-  for (const auto& f : s.calibration) {
-    if (!std::filesystem::is_regular_file(f)) fail("calibration.path", "no such file: " + f.string());
-  }
-  if (s.source_uri == "auto" && !s.sample_capture.empty() &&
-      !std::filesystem::is_regular_file(s.sample_capture)) {
-    fail("source.sample_capture", "no such file: " + s.sample_capture.string());
-  }
-  if (s.http_host.empty()) fail("http.host", "must not be empty");
-  if (!s.http_token_file.empty() && !std::filesystem::is_regular_file(s.http_token_file))
-    fail("http.token_file", "no such file: " + s.http_token_file.string());
-  if (s.http_tls_cert.empty() != s.http_tls_key.empty())
-    fail(s.http_tls_cert.empty() ? "http.tls_cert" : "http.tls_key",
-         "http.tls_cert and http.tls_key go together");
+std::string Settings::check() const {
+  const auto no_file = [](const std::filesystem::path& f) { return !std::filesystem::is_regular_file(f); };
+  const auto problem = [](const std::string& key, const std::string& what) { return key + ": " + what; };
+  if (source_uri.empty()) return problem("source.uri", "must not be empty");
+  if (calibration.empty()) return problem("calibration.path", "is required");
+  for (const auto& f : calibration)
+    if (no_file(f)) return problem("calibration.path", "no such file: " + f.string());
+  if (source_uri == "auto" && !sample_capture.empty() && no_file(sample_capture))
+    return problem("source.sample_capture", "no such file: " + sample_capture.string());
+  if (http_host.empty()) return problem("http.host", "must not be empty");
+  if (!http_token_file.empty() && no_file(http_token_file))
+    return problem("http.token_file", "no such file: " + http_token_file.string());
+  if (http_tls_cert.empty() != http_tls_key.empty())
+    return problem(http_tls_cert.empty() ? "http.tls_cert" : "http.tls_key",
+                   "http.tls_cert and http.tls_key go together");
   for (const auto& [key, f] :
-       {std::pair{"http.tls_cert", &s.http_tls_cert}, std::pair{"http.tls_key", &s.http_tls_key}})
-    if (!f->empty() && !std::filesystem::is_regular_file(*f)) fail(key, "no such file: " + f->string());
-  if (s.sse_max_clients >= s.http_threads) {
-    fail("pipeline.sse_max_clients", "must be below http.threads (each event stream holds a thread), got " +
-                                         std::to_string(s.sse_max_clients) +
-                                         " >= " + std::to_string(s.http_threads));
+       {std::pair{"http.tls_cert", &http_tls_cert}, std::pair{"http.tls_key", &http_tls_key}})
+    if (!f->empty() && no_file(*f)) return problem(key, "no such file: " + f->string());
+  if (sse_max_clients >= http_threads) {
+    return problem("pipeline.sse_max_clients",
+                   "must be below http.threads (each event stream holds a thread), got " +
+                       std::to_string(sse_max_clients) + " >= " + std::to_string(http_threads));
   }
+  return processor.check();
+}
+
+void validate(const Settings& s) {
+  if (auto why = s.check(); !why.empty()) throw SettingsError(why);
 }
 
 }  // namespace naneye::daemon

@@ -122,7 +122,8 @@ std::filesystem::path default_profile_dir() {
 #endif
 }
 
-std::vector<UsbProfile> load_usb_profiles(const std::filesystem::path& dir) {
+std::vector<UsbProfile> load_usb_profiles(const std::filesystem::path& dir,
+                                          std::vector<std::string>* skipped) {
   std::vector<std::filesystem::path> files;
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec))
@@ -134,6 +135,7 @@ std::vector<UsbProfile> load_usb_profiles(const std::filesystem::path& dir) {
       out.push_back(load_usb_profile(f));
     } catch (const std::exception& e) {
       log()->warn("skipping device profile: {}", e.what());
+      if (skipped) skipped->push_back(e.what());
     }
   }
   return out;

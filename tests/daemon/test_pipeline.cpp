@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "capture.hpp"
+#include "naneye/app/processor.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/source_select.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
@@ -29,7 +30,7 @@ std::unique_ptr<daemon::Pipeline> replay_pipeline(const daemon::Settings& settin
                                                   const std::filesystem::path& file,
                                                   const std::string& query) {
   return std::make_unique<daemon::Pipeline>(
-      settings, daemon::make_processor(settings), daemon::driver_source_factory(),
+      settings, app::make_processor(settings.processor), daemon::driver_source_factory(),
       daemon::SourceChoice{"file://" + file.string() + "?" + query, "test", false}, paper_rig());
 }
 
@@ -55,7 +56,8 @@ TEST(Pipeline, PublishesEveryPairOfALosslessReplayWhileReadersRead) {
   const int n = 60;
   const auto truth = write_capture(dir.path / "c.raw", n);
   daemon::Settings settings;
-  settings.detect = false;  // the hand-over and publication are under test, on frames without a board
+  settings.processor.detect =
+      false;  // the hand-over and publication are under test, on frames without a board
   settings.history = 128;
   settings.frame_snapshot_interval_ms = 0;  // every pair: the most contention on the frame slots
   const auto pipeline = replay_pipeline(settings, dir.path / "c.raw", "speed=max");
@@ -105,7 +107,7 @@ TEST(Pipeline, ReloadsTheRigBetweenPairs) {
   TempDir dir;
   write_capture(dir.path / "c.raw", 20);
   daemon::Settings settings;
-  settings.detect = false;  // the hand-over and publication are under test, on frames without a board
+  settings.processor.detect = false;  // the hand-over and publication are under test, on frames without a board
   const auto pipeline = replay_pipeline(settings, dir.path / "c.raw", "speed=realtime&loop=1");
   pipeline->start();
   auto other = std::make_shared<recon::StereoRig>(*paper_rig());
@@ -129,7 +131,7 @@ TEST(Pipeline, SceneResultsAndTheirMapsBelongToTheirPair) {
   const int n = 3;
   write_scene_capture(dir.path / "s.raw", n);
   daemon::Settings settings;
-  settings.recon_mode = daemon::ReconMode::both;
+  settings.processor.mode = app::ReconMode::both;
   const auto pipeline = replay_pipeline(settings, dir.path / "s.raw", "speed=max");
   std::atomic<int> bad{0}, with_scene{0}, with_map{0};
   auto reader = [&](const std::atomic<bool>& done) {

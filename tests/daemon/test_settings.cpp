@@ -58,7 +58,7 @@ level = "debug"
   EXPECT_EQ(s.http_host, "0.0.0.0");
   EXPECT_EQ(s.http_port, 9001);
   EXPECT_EQ(s.http_threads, 6);
-  EXPECT_DOUBLE_EQ(s.corner_sigma_px, 0.1);
+  EXPECT_DOUBLE_EQ(s.processor.reconstructor.reconstruction.corner_sigma_px, 0.1);
   EXPECT_EQ(s.max_result_age_ms, 250);
   EXPECT_EQ(s.stall_timeout_ms, 900);
   EXPECT_EQ(s.history, 32);
@@ -138,12 +138,46 @@ TEST(Settings, TheShippedConfigIsValid) {
 }
 
 TEST(Settings, ReconModeIsReadAndValidatedByName) {
-  EXPECT_EQ(parse_settings("", "/base").recon_mode, ReconMode::board);  // until scene fits 62 fps
-  EXPECT_EQ(parse_settings("[recon]\nmode = \"board\"\n", "/base").recon_mode, ReconMode::board);
-  EXPECT_EQ(parse_settings("[recon]\nmode = \"scene\"\n", "/base").recon_mode, ReconMode::scene);
-  EXPECT_EQ(parse_settings("[recon]\nmode = \"both\"\n", "/base").recon_mode, ReconMode::both);
+  EXPECT_EQ(parse_settings("", "/base").processor.mode, ReconMode::board);  // until scene fits 62 fps
+  EXPECT_EQ(parse_settings("[recon]\nmode = \"board\"\n", "/base").processor.mode, ReconMode::board);
+  EXPECT_EQ(parse_settings("[recon]\nmode = \"scene\"\n", "/base").processor.mode, ReconMode::scene);
+  EXPECT_EQ(parse_settings("[recon]\nmode = \"both\"\n", "/base").processor.mode, ReconMode::both);
   EXPECT_NE(error_of("[recon]\nmode = \"dense\"\n").find("recon.mode: expected one of board, scene, both"),
             std::string::npos);
   EXPECT_NE(error_of("[recon]\nmode = 1\n").find("recon.mode: expected a string"), std::string::npos);
   EXPECT_NE(error_of("[recon]\nmodes = \"board\"\n").find("recon.modes: unknown key"), std::string::npos);
+}
+
+TEST(Settings, TheBoardKeysLandInTheReconStructs) {
+  const auto defaults = parse_settings("", "/base").processor;
+  const naneye::recon::BoardGeometry paper;  // the one place the paper's board is stated
+  EXPECT_EQ(defaults.reconstructor.corners.board.rows, paper.rows);
+  EXPECT_EQ(defaults.reconstructor.corners.board.cols, paper.cols);
+  EXPECT_DOUBLE_EQ(defaults.reconstructor.corners.board.square_mm, paper.square_mm);
+  EXPECT_TRUE(defaults.reconstructor.tracking);
+  EXPECT_TRUE(defaults.detect);
+  const auto s = parse_settings(
+      "[board]\nrows = 5\ncols = 7\nsquare_mm = 3.5\ntracking = false\ndetect = false\n"
+      "[pipeline]\ncorner_sigma_px = 0.2\n",
+      "/base");
+  const auto& r = s.processor.reconstructor;
+  EXPECT_EQ(r.corners.board.rows, 5);
+  EXPECT_EQ(r.corners.board.cols, 7);
+  EXPECT_DOUBLE_EQ(r.corners.board.square_mm, 3.5);
+  EXPECT_DOUBLE_EQ(r.reconstruction.corner_sigma_px, 0.2);
+  EXPECT_FALSE(r.tracking);
+  EXPECT_FALSE(s.processor.detect);
+  EXPECT_NE(error_of("[board]\nrows = 9\n").find("board.rows: must be in 2..8"), std::string::npos);
+}
+
+TEST(Settings, CheckNamesTheKeyAndRunsTheProcessorsCheck) {
+  Settings s;
+  s.calibration = {std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml"};
+  EXPECT_EQ(s.check(), "");
+  s.http_host.clear();
+  EXPECT_EQ(s.check(), "http.host: must not be empty");
+  s.http_host = "127.0.0.1";
+  s.processor.reconstructor.corners.board.square_mm = -1;
+  EXPECT_EQ(s.check().rfind("board.square_mm: ", 0), 0u) << s.check();
+  EXPECT_THROW(validate(s), SettingsError);
 }

@@ -16,9 +16,9 @@
 #include <string>
 #include <thread>
 
+#include "naneye/app/processor.hpp"
 #include "naneye/daemon/pipeline_stats.hpp"
 #include "naneye/daemon/pipeline_status.hpp"
-#include "naneye/daemon/processor.hpp"
 #include "naneye/daemon/publication.hpp"
 #include "naneye/daemon/rig_reload.hpp"
 #include "naneye/daemon/settings.hpp"

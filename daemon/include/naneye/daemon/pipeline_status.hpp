@@ -7,7 +7,7 @@
 #include <string>
 
 #include "naneye/daemon/latency.hpp"
-#include "naneye/daemon/scene_result.hpp"
+#include "naneye/app/scene_result.hpp"
 #include "naneye/daemon/source_supervisor.hpp"
 #include "naneye/driver/frame_source.hpp"
 

@@ -13,8 +13,8 @@
 #include <cstdint>
 
 #include "naneye/daemon/pinned_slots.hpp"
-#include "naneye/daemon/processor.hpp"
-#include "naneye/daemon/scene_result.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/scene_result.hpp"
 #include "naneye/driver/frame.hpp"
 #include "naneye/recon/pair/result.hpp"
 

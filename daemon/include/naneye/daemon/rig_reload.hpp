@@ -16,7 +16,7 @@
 #include <string>
 
 #include "naneye/daemon/pipeline_status.hpp"
-#include "naneye/daemon/processor.hpp"
+#include "naneye/app/processor.hpp"
 #include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::daemon {

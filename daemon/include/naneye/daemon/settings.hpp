@@ -8,12 +8,17 @@
 #include <string>
 #include <vector>
 
+#include "naneye/app/processor.hpp"
+
 namespace naneye::daemon {
 
-// What the worker reconstructs per pair ([recon] mode): the board (corners, pose, P/D/R), the
-// textured scene (sparse points and the dense depth map, docs/scene.md), or both on the same pair.
-enum class ReconMode { board, scene, both };
-const char* to_string(ReconMode m);
+// The shared step's names as the daemon's own code spells them (naneye_app holds them: the CLI runs
+// the same step).
+using app::DepthSlot;
+using app::DepthSummary;
+using app::PairProcessor;
+using app::ReconMode;
+using app::SceneResult;
 
 struct Settings {
   // [source]
@@ -34,23 +39,21 @@ struct Settings {
   // (empty: no token); a PEM certificate chain and its key to serve HTTPS (both or neither).
   std::filesystem::path http_token_file;
   std::filesystem::path http_tls_cert, http_tls_key;
-  // [pipeline]
-  double corner_sigma_px = 0.05;        // corner noise used for the depth sigmas
+  // [pipeline] (corner_sigma_px is the processor's)
   int max_result_age_ms = 500;          // /readyz fails when the latest result is older
   int stall_timeout_ms = 2000;          // no pair for this long while the source streams: "stalled"
   int history = 64;                     // results kept for /v1/events resumption (Last-Event-ID)
   int sse_queue_depth = 64;             // results queued per /v1/events client before it is dropped
   int sse_max_clients = 4;              // simultaneous /v1/events clients
   int frame_snapshot_interval_ms = 20;  // how often the latest frames are copied for /v1/frames
-  // [board] the calibration target seen by both eyes (the paper's 9 x 7 squares: 6 x 8 inner corners)
-  int board_rows = 6, board_cols = 8;  // inner corners
-  double square_mm = 5.99;
-  bool tracking = true;  // search around the previous pair's corners first
-  bool detect = true;    // false: serve frames and timing only (a rig without a target in view)
-  // [recon]
-  // board until the scene path fits the 62 fps budget: sparse alone takes 17-31 ms per pair today
-  // (docs/scene.md), so "both" would drop every other pair of a live camera (docs/http-api.md).
-  ReconMode recon_mode = ReconMode::board;
+  // [board], [recon] mode and [pipeline] corner_sigma_px: the per-pair step's own settings (the
+  // board's grid, square size and tracking, whether to detect at all, board/scene/both), with the
+  // recon structs' defaults (the paper's board: 6 x 8 inner corners of 5.99 mm).
+  app::ProcessorSettings processor;
+
+  // Empty when usable, otherwise the first problem, naming the key ("calibration.path: is required"):
+  // each section's rules, the cross-field ones, the referenced files, then processor.check().
+  std::string check() const;
   // [log]
   std::string log_level = "info";  // trace, debug, info, warn, error, critical, off
 };
@@ -70,7 +73,7 @@ Settings parse_settings(const std::string& toml_text, const std::filesystem::pat
 // "HOST:PORT" (or "[v6]:PORT") -> host and port; throws SettingsError naming `key`.
 void parse_listen(const std::string& value, const std::string& key, std::string& host, int& port);
 
-// Checks cross-field rules and that the referenced files exist; throws SettingsError.
+// Throws SettingsError with s.check()'s problem, if any.
 void validate(const Settings& s);
 
 }  // namespace naneye::daemon

@@ -44,8 +44,10 @@ UsbProfile parse_usb_profile(const std::string& toml_text, const std::string& or
 
 // Where the profiles live: $NANEYE_DEVICE_PROFILES, else the installed share dir, else the source tree.
 std::filesystem::path default_profile_dir();
-// Every *.toml of `dir`, sorted by name; files that do not parse are skipped with a warning.
-std::vector<UsbProfile> load_usb_profiles(const std::filesystem::path& dir);
+// Every *.toml of `dir`, sorted by name; files that do not parse are skipped with a warning naming the
+// file and the reason, which also goes into `skipped` when given (for a caller that reports it).
+std::vector<UsbProfile> load_usb_profiles(const std::filesystem::path& dir,
+                                          std::vector<std::string>* skipped = nullptr);
 // The profile for vid:pid in `dir`, if any.
 std::optional<UsbProfile> find_usb_profile(const std::filesystem::path& dir, std::uint16_t vid,
                                            std::uint16_t pid);

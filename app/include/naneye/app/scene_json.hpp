@@ -11,7 +11,7 @@
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 
-namespace naneye::recon::scene {
+namespace naneye::app {
 
 // What the JSON says of a dense map (the map itself goes out as a PNG).
 struct DepthSummary {
@@ -21,8 +21,10 @@ struct DepthSummary {
   double median_mm = std::numeric_limits<double>::quiet_NaN();  // NaN when no pixel has a depth
 };
 
-DepthSummary summarize(const DepthMap& m);
+DepthSummary summarize(const recon::scene::DepthMap& m);
 
-nlohmann::json scene_to_json(const SparseResult& r, const std::optional<DepthSummary>& depth);
+nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::optional<DepthSummary>& depth);
+// The same with the summary of `dense` (null "depth" without one).
+nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const recon::scene::DepthMap* dense);
 
-}  // namespace naneye::recon::scene
+}  // namespace naneye::app

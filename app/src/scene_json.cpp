@@ -1,23 +1,23 @@
 // Serialises one pair's scene (scene_json.hpp). Numbers only where they can be stood behind: a
 // flagged point carries null coordinates and its reason, a map with no depth a null median.
-#include "naneye/recon/scene/scene_json.hpp"
+#include "naneye/app/scene_json.hpp"
 
 #include <cmath>
 
-namespace naneye::recon::scene {
+namespace naneye::app {
 
-DepthSummary summarize(const DepthMap& m) {
+DepthSummary summarize(const recon::scene::DepthMap& m) {
   return {m.valid_count, m.visible_count, m.valid_share, m.median_mm};
 }
 
-nlohmann::json scene_to_json(const SparseResult& r, const std::optional<DepthSummary>& depth) {
+nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::optional<DepthSummary>& depth) {
   nlohmann::json points = nlohmann::json::array();
   for (const auto& p : r.points) {
     nlohmann::json q;
     q["id"] = p.id;
     q["left_px"] = {p.left_px.x(), p.left_px.y()};
     q["valid"] = p.valid();
-    q["status"] = to_string(p.status);
+    q["status"] = recon::scene::to_string(p.status);
     if (p.valid()) {
       q["right_px"] = {p.right_px.x(), p.right_px.y()};
       q["xyz_mm"] = {p.X.x(), p.X.y(), p.X.z()};
@@ -45,4 +45,8 @@ nlohmann::json scene_to_json(const SparseResult& r, const std::optional<DepthSum
   return j;
 }
 
-}  // namespace naneye::recon::scene
+nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const recon::scene::DepthMap* dense) {
+  return scene_to_json(r, dense ? std::optional(summarize(*dense)) : std::nullopt);
+}
+
+}  // namespace naneye::app

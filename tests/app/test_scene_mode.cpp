@@ -5,20 +5,20 @@
 
 #include <cmath>
 
+#include "../daemon/scene_capture.hpp"
 #include "../support/heap_count.hpp"
-#include "naneye/daemon/processor.hpp"
-#include "naneye/daemon/result_json.hpp"
-#include "scene_capture.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/result_json.hpp"
 
 using namespace naneye;
 using namespace naneye::daemon::test;
 
 namespace {
 
-std::unique_ptr<daemon::PairProcessor> processor(daemon::ReconMode mode) {
-  daemon::Settings s;
-  s.recon_mode = mode;
-  auto p = daemon::make_processor(s);
+std::unique_ptr<app::PairProcessor> processor(app::ReconMode mode) {
+  app::ProcessorSettings s;
+  s.mode = mode;
+  auto p = app::make_processor(s);
   p->set_rig(scene_rig());
   return p;
 }
@@ -26,12 +26,12 @@ std::unique_ptr<daemon::PairProcessor> processor(daemon::ReconMode mode) {
 }  // namespace
 
 TEST(SceneMode, SparsePointsHoldAgainstTheTruthBesideTheBoard) {
-  auto proc = processor(daemon::ReconMode::both);
+  auto proc = processor(app::ReconMode::both);
   ASSERT_TRUE(proc->scene());
   const auto scene = test_scene(2);
   const auto pair = scene_pair(2, false);
   recon::PairResult board;
-  daemon::SceneResult out;
+  app::SceneResult out;
   recon::scene::DepthMap map;
   ASSERT_TRUE(proc->dense());
   proc->reserve(out, &map);
@@ -76,10 +76,10 @@ TEST(SceneMode, SparsePointsHoldAgainstTheTruthBesideTheBoard) {
 TEST(SceneMode, TheResultJsonCarriesTheSceneObjectOnlyWhenTheSceneRan) {
   const auto pair = scene_pair(1, false);
   recon::PairResult board;
-  daemon::SceneResult out;
-  processor(daemon::ReconMode::scene)->process_pair(pair, board, out, nullptr);
+  app::SceneResult out;
+  processor(app::ReconMode::scene)->process_pair(pair, board, out, nullptr);
   ASSERT_TRUE(out.computed);
-  const auto j = daemon::result_to_json(board, out);
+  const auto j = app::result_to_json(board, out);
   ASSERT_TRUE(j.contains("scene"));
   const auto& sc = j["scene"];
   EXPECT_EQ(sc["points"].size(), out.sparse.points.size());
@@ -107,23 +107,23 @@ TEST(SceneMode, TheResultJsonCarriesTheSceneObjectOnlyWhenTheSceneRan) {
   EXPECT_EQ(valid, out.sparse.valid_count);
 
   // Board mode: no scene computed, no "scene" key (not an empty one).
-  auto board_only = processor(daemon::ReconMode::board);
+  auto board_only = processor(app::ReconMode::board);
   EXPECT_FALSE(board_only->scene());
   board_only->process_pair(pair, board, out, nullptr);
   EXPECT_FALSE(out.computed);
   EXPECT_TRUE(out.sparse.points.empty());
-  EXPECT_FALSE(daemon::result_to_json(board, out).contains("scene"));
+  EXPECT_FALSE(app::result_to_json(board, out).contains("scene"));
 }
 
 // Once warm, a pair allocates nothing: the board and sparse halves and the daemon's own glue
 // (`depth` null), then the whole step with the dense map (`with_dense`).
 static void expect_no_allocation_per_pair(bool with_dense) {
   for (bool bayer : {false, true}) {
-    auto proc = processor(daemon::ReconMode::both);
+    auto proc = processor(app::ReconMode::both);
     std::vector<driver::StereoPair> pairs;
     for (int k = 0; k < 3; ++k) pairs.push_back(scene_pair(k, bayer));
     recon::PairResult board;
-    daemon::SceneResult out;
+    app::SceneResult out;
     recon::scene::DepthMap map;
     recon::scene::DepthMap* depth = with_dense ? &map : nullptr;
     proc->reserve(out, depth);

@@ -1,19 +1,45 @@
 #pragma once
-// The per-pair processing step the pipeline runs on its worker thread. The product's step
-// (detect -> undistort -> triangulate -> board pose -> metrics) is assembled from recon/ and drops in
-// here; the daemon only depends on this interface.
+// The per-pair processing step naneyed's worker and `naneye recon` run. The product's step
+// (detect -> undistort -> triangulate -> board pose -> metrics, and the textured scene) is assembled
+// from recon/ here; the daemon's pipeline only depends on the PairProcessor interface.
 #include <memory>
+#include <string>
 #include <string_view>
 
-#include "naneye/daemon/scene_result.hpp"
-#include "naneye/daemon/settings.hpp"
+#include "naneye/app/scene_result.hpp"
+#include "naneye/base/enum_table.hpp"
 #include "naneye/driver/frame.hpp"
+#include "naneye/recon/camera/rig.hpp"
 #include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/pair/result.hpp"
-#include "naneye/recon/camera/rig.hpp"
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
+#include "naneye/recon/scene/sparse.hpp"
 
-namespace naneye::daemon {
+namespace naneye::app {
+
+// What the step reconstructs per pair (naneyed's [recon] mode): the board (corners, pose, P/D/R),
+// the textured scene (sparse points and the dense depth map, docs/scene.md), or both on the same pair.
+enum class ReconMode { board, scene, both };
+inline constexpr base::EnumTable<ReconMode, 3> kReconModeNames{
+    {{ReconMode::board, "board"}, {ReconMode::scene, "scene"}, {ReconMode::both, "both"}}};
+const char* to_string(ReconMode m);
+
+// The step's settings: the recon structs themselves (their defaults are the product's), read from
+// naneyed's [board], [pipeline] and [recon] sections or from `naneye recon`'s flags.
+struct ProcessorSettings {
+  // [board] detect: false serves frames and timing only (a rig without a target in view).
+  bool detect = true;
+  // [recon] mode: board until the scene path fits the 62 fps budget: sparse alone takes 17-31 ms per
+  // pair today (docs/scene.md), so "both" would drop every other pair of a live camera.
+  ReconMode mode = ReconMode::board;
+  // [board] rows, cols, square_mm (corners.board),
+  // tracking; [pipeline] corner_sigma_px (reconstruction.corner_sigma_px).
+  recon::StereoReconstructorSettings reconstructor;
+  recon::scene::SparseSettings sparse;
+
+  // Empty when usable, otherwise what is wrong, naming naneyed's key ("board.rows: ...").
+  std::string check() const;
+};
 
 class PairProcessor {
  public:
@@ -45,12 +71,8 @@ class PairProcessor {
 };
 
 // The processing step naneyed and `naneye recon` run: recon::StereoReconstructor on both raw frames
-// (the board of settings' [board] section).
-std::unique_ptr<PairProcessor> make_processor(const Settings& settings);
-
-// The reconstructor's settings for the [board] and [pipeline] sections (what make_processor uses;
-// `naneye recon --left/--right` runs recon::StereoReconstructor on images of any size with them).
-recon::StereoReconstructorSettings reconstructor_settings(const Settings& settings);
+// and, per `settings.mode`, the scene.
+std::unique_ptr<PairProcessor> make_processor(const ProcessorSettings& settings);
 
 // A driver frame as the recon module sees it (no copy).
 recon::RawImageView image_view(const driver::Frame& frame);
@@ -58,4 +80,4 @@ recon::RawImageView image_view(const driver::Frame& frame);
 // Copies the pair's identity and timestamps into `out` and clears everything else.
 void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out);
 
-}  // namespace naneye::daemon
+}  // namespace naneye::app

@@ -1,14 +1,29 @@
-#include "naneye/daemon/processor.hpp"
+#include "naneye/app/processor.hpp"
 
 #include <opencv2/core/utility.hpp>
 #include <optional>
 
-#include "naneye/recon/scene/dense.hpp"
-#include "naneye/recon/scene/scene_json.hpp"
-#include "naneye/recon/scene/sparse.hpp"
+#include "naneye/app/scene_json.hpp"
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
+#include "naneye/recon/scene/dense.hpp"
+#include "naneye/recon/scene/sparse.hpp"
 
-namespace naneye::daemon {
+namespace naneye::app {
+
+const char* to_string(ReconMode m) { return base::enum_name(kReconModeNames, m); }
+
+std::string ProcessorSettings::check() const {
+  const recon::BoardGeometry& board = reconstructor.corners.board;
+  // BoardGeometry names its field ("rows and cols: ...", "square_mm: ..."): the keys of [board].
+  if (const auto why = board.check(); !why.empty()) return "board." + why;
+  if (board.count() > recon::kMaxCorners)
+    return "board.rows, board.cols: at most " + std::to_string(recon::kMaxCorners) + " inner corners, got " +
+           std::to_string(board.rows) + " x " + std::to_string(board.cols);
+  if (!(reconstructor.reconstruction.corner_sigma_px > 0))
+    return "pipeline.corner_sigma_px: must be above 0, got " +
+           std::to_string(reconstructor.reconstruction.corner_sigma_px);
+  return {};
+}
 
 void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out) {
   out.pair = pair.index;
@@ -31,14 +46,6 @@ recon::RawImageView image_view(const driver::Frame& f) {
   return v;
 }
 
-recon::StereoReconstructorSettings reconstructor_settings(const Settings& s) {
-  recon::StereoReconstructorSettings r;
-  r.corners.board = {s.board_rows, s.board_cols, s.square_mm};
-  r.reconstruction.corner_sigma_px = s.corner_sigma_px;
-  r.tracking = s.tracking;
-  return r;
-}
-
 namespace {
 
 // board.detect = false: every pair is published with its timing and frames, and no board.
@@ -51,27 +58,43 @@ class TimingOnly final : public PairProcessor {
   std::string_view name() const override { return "timing only (board.detect = false)"; }
 };
 
+// How the board's corners are triangulated, in the words of the status line.
+std::string method_text(recon::TriangulationMethod m) {
+  if (m == recon::TriangulationMethod::refined) return "niter2 + refinement";
+  return recon::to_string(m);
+}
+
+// What the step does, for the log and /v1/status: the board's triangulation as configured.
+std::string step_name(const ProcessorSettings& s) {
+  if (s.mode == ReconMode::board)
+    return "board reconstruction (corners, " + method_text(s.reconstructor.reconstruction.method) +
+           ", board pose)";
+  if (s.mode == ReconMode::scene) return "scene reconstruction (sparse features, dense depth map)";
+  return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
+}
+
 // The product's processing step: the board (issue #5: both eyes' corners, triangulation, board
 // pose, P/D/R) and/or the textured scene (issue 14: sparse points, the dense map), per [recon] mode.
 // Board and scene run on the same pair; the scene's two paths share one luminance.
 class Reconstruction final : public PairProcessor {
  public:
-  explicit Reconstruction(const Settings& s)
-      : settings_(reconstructor_settings(s)),
-        board_wanted_(s.recon_mode != ReconMode::scene),
-        scene_wanted_(s.recon_mode != ReconMode::board) {}
+  explicit Reconstruction(const ProcessorSettings& s)
+      : settings_(s),
+        name_(step_name(s)),
+        board_wanted_(s.mode != ReconMode::scene),
+        scene_wanted_(s.mode != ReconMode::board) {}
 
   void set_rig(const recon::StereoRig& rig) override {
     if (board_wanted_) {
       if (board_)
         board_->set_rig(rig);
       else
-        board_.emplace(rig, settings_);
+        board_.emplace(rig, settings_.reconstructor);
     }
     // Built anew (its masks and rays depend on the rig): on a reload this runs on the caller's
     // thread (Pipeline::reload), never between two pairs of the worker.
     if (scene_wanted_) {
-      sparse_.emplace(rig, sparse_settings_);
+      sparse_.emplace(rig, settings_.sparse);
       dense_.emplace(rig);
       map_pixels_ = static_cast<std::size_t>(rig.left.width()) * static_cast<std::size_t>(rig.left.height());
     }
@@ -92,28 +115,24 @@ class Reconstruction final : public PairProcessor {
     if (dense_ && depth) {
       dense_->reconstruct(sparse_->luma(), *depth);
       scene.dense = true;
-      scene.depth = recon::scene::summarize(*depth);
+      scene.depth = summarize(*depth);
     }
   }
   bool scene() const override { return scene_wanted_; }
   bool dense() const override { return scene_wanted_; }
   void reserve(SceneResult& scene, recon::scene::DepthMap* depth) const override {
     if (!scene_wanted_) return;
-    scene.sparse.points.reserve(static_cast<std::size_t>(sparse_settings_.max_features));
+    scene.sparse.points.reserve(static_cast<std::size_t>(settings_.sparse.max_features));
     if (depth) {
       depth->z_mm.reserve(map_pixels_);
       depth->sigma_mm.reserve(map_pixels_);
     }
   }
-  std::string_view name() const override {
-    if (!scene_wanted_) return "board reconstruction (corners, niter2 + refinement, board pose)";
-    if (!board_wanted_) return "scene reconstruction (sparse features, dense depth map)";
-    return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
-  }
+  std::string_view name() const override { return name_; }
 
  private:
-  recon::StereoReconstructorSettings settings_;
-  recon::scene::SparseSettings sparse_settings_;
+  ProcessorSettings settings_;
+  std::string name_;
   bool board_wanted_, scene_wanted_;
   std::optional<recon::StereoReconstructor> board_;
   std::optional<recon::scene::SparseReconstructor> sparse_;
@@ -123,7 +142,7 @@ class Reconstruction final : public PairProcessor {
 
 }  // namespace
 
-std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
+std::unique_ptr<PairProcessor> make_processor(const ProcessorSettings& settings) {
   if (!settings.detect) return std::make_unique<TimingOnly>();
   // The per-pair step is written for one core. OpenCV's own thread pool (TBB workers that spin while
   // idle) only takes the other core from the capture and HTTP threads: measured, it tripled naneyed's
@@ -132,4 +151,4 @@ std::unique_ptr<PairProcessor> make_processor(const Settings& settings) {
   return std::make_unique<Reconstruction>(settings);
 }
 
-}  // namespace naneye::daemon
+}  // namespace naneye::app

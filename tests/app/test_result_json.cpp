@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include "naneye/daemon/processor.hpp"
-#include "naneye/daemon/result_json.hpp"
+#include "naneye/app/processor.hpp"
+#include "naneye/app/result_json.hpp"
 
 using namespace naneye;
 
@@ -39,7 +39,7 @@ recon::PairResult sample_result() {
 }  // namespace
 
 TEST(ResultJson, HasTheIssue5Shape) {
-  const auto j = daemon::result_to_json(sample_result());
+  const auto j = app::result_to_json(sample_result());
   EXPECT_EQ(j.at("pair"), 17);
   EXPECT_EQ(j.at("t_left_ns"), 123456789);
   EXPECT_EQ(j.at("t_right_ns"), 126000000);
@@ -65,7 +65,7 @@ TEST(ResultJson, HasTheIssue5Shape) {
 TEST(ResultJson, BoardAndMetricsAreNullWithoutABoard) {
   recon::PairResult r;
   r.pair = 3;
-  const auto j = daemon::result_to_json(r);
+  const auto j = app::result_to_json(r);
   EXPECT_TRUE(j.at("board").is_null());
   EXPECT_TRUE(j.at("metrics").is_null());
   EXPECT_TRUE(j.at("points").is_array());
@@ -74,7 +74,7 @@ TEST(ResultJson, BoardAndMetricsAreNullWithoutABoard) {
 
 TEST(ResultJson, RoundTripsThroughText) {
   const auto r = sample_result();
-  const auto back = daemon::result_from_json(nlohmann::json::parse(daemon::result_to_json(r).dump()));
+  const auto back = app::result_from_json(nlohmann::json::parse(app::result_to_json(r).dump()));
   EXPECT_EQ(back.pair, r.pair);
   EXPECT_EQ(back.t_right_ns, r.t_right_ns);
   ASSERT_EQ(back.point_count, 2);
@@ -96,25 +96,25 @@ TEST(ResultJson, EachEyesReferenceCheckIsShownAsTheSourceReportedIt) {
   pair->left.reference = driver::ReferenceStatus::not_checked;
   pair->right.reference = driver::ReferenceStatus::failed;
   recon::PairResult r;
-  daemon::fill_pair_identity(*pair, r);
-  const auto j = daemon::result_to_json(r);
+  app::fill_pair_identity(*pair, r);
+  const auto j = app::result_to_json(r);
   EXPECT_EQ(j.at("reference"), nlohmann::json({{"left", "not_checked"}, {"right", "failed"}}));
-  const auto back = daemon::result_from_json(j);
+  const auto back = app::result_from_json(j);
   EXPECT_STREQ(back.reference_left, "not_checked");
   EXPECT_STREQ(back.reference_right, "failed");
   // A result that never came from a source says nothing.
-  EXPECT_EQ(daemon::result_to_json(recon::PairResult{}).at("reference"),
+  EXPECT_EQ(app::result_to_json(recon::PairResult{}).at("reference"),
             nlohmann::json({{"left", nullptr}, {"right", nullptr}}));
   auto bad = j;
   bad["reference"]["left"] = "ok";
-  EXPECT_THROW(daemon::result_from_json(bad), std::invalid_argument);
+  EXPECT_THROW(app::result_from_json(bad), std::invalid_argument);
 }
 
 TEST(ResultJson, RefusesMalformedObjects) {
-  auto j = daemon::result_to_json(sample_result());
+  auto j = app::result_to_json(sample_result());
   j["points"][0]["xyz_mm"] = {1.0, 2.0};
-  EXPECT_THROW(daemon::result_from_json(j), nlohmann::json::exception);
-  auto k = daemon::result_to_json(sample_result());
+  EXPECT_THROW(app::result_from_json(j), nlohmann::json::exception);
+  auto k = app::result_to_json(sample_result());
   k.erase("pair");
-  EXPECT_THROW(daemon::result_from_json(k), nlohmann::json::exception);
+  EXPECT_THROW(app::result_from_json(k), nlohmann::json::exception);
 }

@@ -1,8 +1,8 @@
-#include "naneye/daemon/result_json.hpp"
+#include "naneye/app/result_json.hpp"
 
 #include <stdexcept>
 
-namespace naneye::daemon {
+namespace naneye::app {
 namespace {
 
 template <typename V>
@@ -86,8 +86,7 @@ const char* reference_text(const nlohmann::json& j) {
 nlohmann::json result_to_json(const recon::PairResult& r, const SceneResult& scene) {
   nlohmann::json j = result_to_json(r);
   if (scene.computed)
-    j["scene"] =
-        recon::scene::scene_to_json(scene.sparse, scene.dense ? std::optional(scene.depth) : std::nullopt);
+    j["scene"] = scene_to_json(scene.sparse, scene.dense ? std::optional(scene.depth) : std::nullopt);
   return j;
 }
 
@@ -139,4 +138,4 @@ recon::PairResult result_from_json(const nlohmann::json& j) {
   return r;
 }
 
-}  // namespace naneye::daemon
+}  // namespace naneye::app

@@ -5,13 +5,11 @@
 // the same sequence number, so a reader can tell whether the map it finds belongs to its result.
 #include <cstdint>
 
+#include "naneye/app/scene_json.hpp"
 #include "naneye/recon/scene/dense.hpp"
-#include "naneye/recon/scene/scene_json.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 
-namespace naneye::daemon {
-
-using recon::scene::DepthSummary;
+namespace naneye::app {
 
 struct SceneResult {
   bool computed = false;  // the scene path ran on this pair (false in board mode)
@@ -35,4 +33,4 @@ struct DepthSlot {
   recon::scene::DepthMap map;
 };
 
-}  // namespace naneye::daemon
+}  // namespace naneye::app
