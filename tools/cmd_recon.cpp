@@ -241,7 +241,7 @@ void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
 // 250 x 250 only, so these do not go through a FrameSource). Decoding allocates per image.
 void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
   const auto pairs = image_pairs(o.left, o.right);
-  driver::ImageOptions io;
+  driver::ImageSettings io;
   if (o.color != "mono" && o.color != "grbg") throw std::invalid_argument("--color: mono or grbg");
   io.color = o.color == "grbg" ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
   recon::StereoReconstructor reconstructor(rig, processor_settings(o).reconstructor);

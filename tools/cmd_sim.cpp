@@ -13,7 +13,7 @@ namespace naneye::tools {
 void add_sim_commands(CLI::App& app) {
   auto* sim =
       app.add_subcommand("sim", "Render a simulated NanEye Stereo capture with ground truth (truth.json)");
-  auto o = std::make_shared<sim::CaptureOptions>();
+  auto o = std::make_shared<sim::CaptureSettings>();
   auto out = std::make_shared<std::string>();
   auto calib = std::make_shared<std::string>();
   sim->add_option("--preset", o->preset, "paper-d1 | paper-d2 | paper-d3 (the paper's datasets)")

@@ -53,7 +53,7 @@ bool is_image_file_name(const std::filesystem::path& file) {
   return false;
 }
 
-void decode_image(std::span<const std::uint8_t> bytes, const ImageOptions& options, Image10& out,
+void decode_image(std::span<const std::uint8_t> bytes, const ImageSettings& options, Image10& out,
                   const std::string& origin) {
   if (bytes.empty()) fail(origin, "empty file, not an image");
   if (!known_signature(bytes))
@@ -98,7 +98,7 @@ void decode_image(std::span<const std::uint8_t> bytes, const ImageOptions& optio
   }
 }
 
-void read_image(const std::filesystem::path& file, const ImageOptions& options, Image10& out) {
+void read_image(const std::filesystem::path& file, const ImageSettings& options, Image10& out) {
   const std::string origin = file.string();
   std::error_code ec;
   const auto size = std::filesystem::file_size(file, ec);

@@ -10,7 +10,7 @@ namespace naneye::recon {
 namespace {
 
 // One eye: luminance, 8-bit stretch, findChessboardCorners, cornerSubPix. Empty when not found.
-std::vector<cv::Point2f> detect_eye(const RawImageView& image, const OpenCvPathOptions& o) {
+std::vector<cv::Point2f> detect_eye(const RawImageView& image, const OpenCvPathSettings& o) {
   cv::Mat luma(image.height, image.width, CV_32FC1), scratch(image.height, image.width, CV_32FC1);
   raw_to_luminance(image, luma.ptr<float>(), scratch.ptr<float>());
   cv::Mat gray8;
@@ -38,7 +38,7 @@ OpenCvRig opencv_rig(const StereoRig& rig) {
 }
 
 OpenCvPathResult opencv_reconstruct_pair(const StereoRig& rig, const RawImageView& left,
-                                         const RawImageView& right, const OpenCvPathOptions& o) {
+                                         const RawImageView& right, const OpenCvPathSettings& o) {
   OpenCvPathResult res;
   const int n = o.board.rows * o.board.cols;
   std::vector<cv::Point2f> pl = detect_eye(left, o);

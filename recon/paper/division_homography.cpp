@@ -238,7 +238,7 @@ struct Solved {
   int iterations = 0;
 };
 
-Solved solve(std::span<const PlaneCorrespondences> planes, const DivisionHomographyOptions& opt) {
+Solved solve(std::span<const PlaneCorrespondences> planes, const DivisionHomographySettings& opt) {
   Solved out;
   if (planes.empty()) return out;
   // Condition: scale every coordinate by the RMS radius so that radii are ~1 (lambda~ = lambda s^2).
@@ -305,7 +305,7 @@ Solved solve(std::span<const PlaneCorrespondences> planes, const DivisionHomogra
 
 DivisionHomography estimate_division_homography(std::span<const Eigen::Vector2d> left,
                                                 std::span<const Eigen::Vector2d> right,
-                                                const DivisionHomographyOptions& opt) {
+                                                const DivisionHomographySettings& opt) {
   PlaneCorrespondences plane;
   plane.left.assign(left.begin(), left.end());
   plane.right.assign(right.begin(), right.end());
@@ -323,7 +323,7 @@ DivisionHomography estimate_division_homography(std::span<const Eigen::Vector2d>
 }
 
 DivisionLambdas estimate_division_lambdas(std::span<const PlaneCorrespondences> planes,
-                                          const DivisionHomographyOptions& opt) {
+                                          const DivisionHomographySettings& opt) {
   const Solved s = solve(planes, opt);
   DivisionLambdas out;
   out.ok = s.ok;

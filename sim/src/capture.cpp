@@ -52,7 +52,7 @@ nlohmann::json truth_json(const Truth& t, int pair, std::int64_t t_left_ns, std:
   return j;
 }
 
-CaptureSummary write_capture(const CaptureOptions& o) {
+CaptureSummary write_capture(const CaptureSettings& o) {
   const auto preset = find_preset(o.preset);
   if (!preset)
     throw std::invalid_argument("sim: unknown preset '" + o.preset + "' (paper-d1, paper-d2, paper-d3)");

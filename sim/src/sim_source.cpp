@@ -43,10 +43,10 @@ bool flag(const driver::SourceUri& uri, const char* name, bool fallback) {
 
 }  // namespace
 
-SimSourceOptions parse_sim_uri(const driver::SourceUri& uri) {
+SimSourceSettings parse_sim_uri(const driver::SourceUri& uri) {
   uri.allow_only({"fps", "motion", "seed", "bayer", "noise", "pairs", "speed", "color", "tolerance_ms",
                   "reference", "supersample"});
-  SimSourceOptions o;
+  SimSourceSettings o;
   o.preset = uri.target.empty() ? "paper-d3" : uri.target;
   o.textured = textured_preset(o.preset).has_value();
   if (!o.textured && !find_preset(o.preset))
@@ -114,7 +114,7 @@ Pose trajectory_pose(Motion m, const BoardGeometry& board, double distance_mm, d
   return p;
 }
 
-SimSource::SimSource(SimSourceOptions options, std::string uri_text)
+SimSource::SimSource(SimSourceSettings options, std::string uri_text)
     : driver::ByteStreamSource(driver::SourceInfo{uri_text.empty() ? "sim://" + options.preset : uri_text,
                                                   "sim", options.preset, options.realtime, options.fps},
                                options.stream),

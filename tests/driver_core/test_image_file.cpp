@@ -8,7 +8,7 @@
 namespace naneye::driver {
 namespace {
 
-std::string error_of(const std::string& path, ImageOptions o = {}) {
+std::string error_of(const std::string& path, ImageSettings o = {}) {
   Image10 im;
   try {
     read_image(path, o, im);
@@ -51,7 +51,7 @@ TEST(ImageFile, EightAndSixteenBitFilesBecomeTenBitValues) {
   read_image(dir.image("g16.pgm", g16), {}, im);  // PGM too (a 16-bit P5)
   EXPECT_EQ(im.pixels, (std::vector<std::uint16_t>{0, 512, 1023, 16}));
   // bits=10: a 16-bit container holding the sensor's own values is kept as is ...
-  ImageOptions ten;
+  ImageSettings ten;
   ten.bits16 = 10;
   cv::Mat raw10 = (cv::Mat_<std::uint16_t>(1, 3) << 0, 513, 1023);
   read_image(dir.image("raw10.png", raw10), ten, im);
@@ -78,7 +78,7 @@ TEST(ImageFile, FilesItCannotUseGiveAnErrorNamingTheFileAndWhy) {
     EXPECT_NE(e.find(why), std::string::npos) << e;
   }
   // A mosaic must be one channel: a colour file cannot be a raw GRBG frame.
-  ImageOptions grbg;
+  ImageSettings grbg;
   grbg.color = ColorMode::bayer_grbg;
   const cv::Mat colour(4, 4, CV_8UC3, cv::Scalar(10, 20, 30));
   EXPECT_NE(error_of(dir.image("colour.png", colour), grbg).find("one channel"), std::string::npos);

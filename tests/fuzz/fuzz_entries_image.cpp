@@ -59,7 +59,7 @@ int unpack_v4l2(const std::uint8_t* data, std::size_t size) {
 int decode_image_file(const std::uint8_t* data, std::size_t size) {
   // data[0]: options (mosaic, bits=10); the rest: the file.
   if (size < 1) return 0;
-  ImageOptions o;
+  ImageSettings o;
   o.color = (data[0] & 1) ? ColorMode::bayer_grbg : ColorMode::mono;
   o.bits16 = (data[0] & 2) ? 10 : 16;
   static Image10 image;  // its buffer is reused, as images:// does

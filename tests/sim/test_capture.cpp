@@ -53,8 +53,8 @@ std::vector<std::unique_ptr<driver::StereoPair>> replay(const fs::path& file,
   return pairs;
 }
 
-CaptureOptions small(const fs::path& dir, int pairs, std::uint64_t seed) {
-  CaptureOptions o;
+CaptureSettings small(const fs::path& dir, int pairs, std::uint64_t seed) {
+  CaptureSettings o;
   o.preset = "paper-d3";
   o.calibration = fs::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml";
   o.pairs = pairs;
@@ -78,7 +78,7 @@ TEST(Capture, SameSeedGivesTheSameBytes) {
 
 TEST(Capture, DriverParsesAndPairsItAsTheTruthSays) {
   TempDir d;
-  CaptureOptions o = small(d.path, 6, 9);
+  CaptureSettings o = small(d.path, 6, 9);
   // Start just before the 32-bit tick counter wraps: pairing must extend time across it.
   o.start_ticks = (std::int64_t{1} << 32) - 48'000'000 / 20;
   write_capture(o);
@@ -133,7 +133,7 @@ TEST(Capture, FreeRunningClocksDriftWithinTheSensorsRange) {
 
 TEST(Capture, NeydHoldsTheSamePairsAsRaw) {
   TempDir r, n;
-  CaptureOptions o = small(r.path, 3, 4);
+  CaptureSettings o = small(r.path, 3, 4);
   write_capture(o);
   o.out_dir = n.path;
   o.format = CaptureFormat::neyd;
@@ -150,7 +150,7 @@ TEST(Capture, NeydHoldsTheSamePairsAsRaw) {
 
 TEST(Capture, TruthAgreesWithTheCameraModel) {
   TempDir d;
-  CaptureOptions o = small(d.path, 10, 3);
+  CaptureSettings o = small(d.path, 10, 3);
   o.partial_share = 0.3;
   o.absent_share = 0.1;
   write_capture(o);
@@ -194,7 +194,7 @@ TEST(Capture, TruthAgreesWithTheCameraModel) {
 
 TEST(Capture, FaultsShowUpInTheDriverCounters) {
   TempDir d;
-  CaptureOptions o = small(d.path, 8, 12);
+  CaptureSettings o = small(d.path, 8, 12);
   o.faults.lost_record_rate = 0.25;
   o.faults.truncate_tail = 1000;
   write_capture(o);
@@ -213,7 +213,7 @@ TEST(Capture, FaultsShowUpInTheDriverCounters) {
 
 TEST(Capture, BitFlipsAndDroppedBytesAreSurvivedAndCounted) {
   TempDir d;
-  CaptureOptions o = small(d.path, 10, 2);
+  CaptureSettings o = small(d.path, 10, 2);
   o.faults.dropped_byte_rate = 1e-6;  // about one record in eight loses a byte ...
   o.faults.bit_flip_rate = 1e-6;      // ... and one in eight gets a flipped bit
   write_capture(o);

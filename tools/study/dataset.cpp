@@ -33,7 +33,7 @@ bool ids_reversed(const recon::PairResult& r, const std::vector<Eigen::Vector2d>
 
 // The OpenCV user path on the same pair, its ids matched to the truth's the same way.
 void run_opencv(const Dataset& d, const cv::Mat& left, const cv::Mat& right, View& v) {
-  recon::OpenCvPathOptions o;
+  recon::OpenCvPathSettings o;
   o.board = d.board;
   const recon::OpenCvPathResult r =
       recon::opencv_reconstruct_pair(d.rig, sim::raw_view(left), sim::raw_view(right), o);

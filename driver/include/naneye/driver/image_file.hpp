@@ -28,7 +28,7 @@ class ImageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-struct ImageOptions {
+struct ImageSettings {
   ColorMode color = ColorMode::mono;  // bayer_grbg: the file holds the raw mosaic (one channel)
   int bits16 = 16;                    // 16: 16-bit values are full scale; 10: they are 10-bit already
 };
@@ -45,10 +45,10 @@ struct Image10 {
 inline constexpr long long kMaxImagePixels = 4096LL * 4096;
 
 // Decodes `bytes`; throws ImageError naming `origin` (a path, or "<memory>") and the problem.
-void decode_image(std::span<const std::uint8_t> bytes, const ImageOptions& options, Image10& out,
+void decode_image(std::span<const std::uint8_t> bytes, const ImageSettings& options, Image10& out,
                   const std::string& origin = "<memory>");
 // Reads the whole file and decodes it (files above 256 MiB are refused unread).
-void read_image(const std::filesystem::path& file, const ImageOptions& options, Image10& out);
+void read_image(const std::filesystem::path& file, const ImageSettings& options, Image10& out);
 
 // True for the file name extensions read_image is meant for (.png .jpg .jpeg .pgm .ppm .pnm .bmp .tif
 // .tiff, any case): how images://DIR picks its files.

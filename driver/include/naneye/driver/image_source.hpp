@@ -31,7 +31,7 @@ struct ImagesUri {
   std::vector<std::pair<std::string, std::string>> pairs;  // the explicit list (left, right)
   double fps = 0;
   bool loop = false;
-  ImageOptions image;
+  ImageSettings image;
   StreamSettings stream;
 };
 // Pure: no file is touched (list_image_pairs does that). Throws SourceError naming the parameter.

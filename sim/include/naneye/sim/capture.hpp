@@ -13,7 +13,7 @@ namespace naneye::sim {
 
 enum class CaptureFormat { raw, neyd };
 
-struct CaptureOptions {
+struct CaptureSettings {
   std::string preset = "paper-d3";
   std::filesystem::path calibration;  // empty: the preset's
   int pairs = 12;
@@ -36,7 +36,7 @@ struct CaptureSummary {
   int pairs = 0, full = 0, partial = 0, absent = 0, lost_records = 0;
 };
 
-CaptureSummary write_capture(const CaptureOptions& o);
+CaptureSummary write_capture(const CaptureSettings& o);
 
 // One pair's truth entry, keys as docs/simulator.md lists them.
 nlohmann::json truth_json(const Truth& t, int pair, std::int64_t t_left_ns, std::int64_t t_right_ns);

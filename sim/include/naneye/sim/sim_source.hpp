@@ -32,7 +32,7 @@ namespace naneye::sim {
 
 enum class Motion { orbit, sweep, still, handheld };
 
-struct SimSourceOptions {
+struct SimSourceSettings {
   std::string preset = "paper-d3";
   double fps = 50;
   Motion motion = Motion::orbit;
@@ -46,14 +46,14 @@ struct SimSourceOptions {
   int supersample = 1;
 };
 
-SimSourceOptions parse_sim_uri(const driver::SourceUri& uri);
+SimSourceSettings parse_sim_uri(const driver::SourceUri& uri);
 
 // The board pose at time t (s) on a trajectory around the preset's distance.
 Pose trajectory_pose(Motion m, const BoardGeometry& board, double distance_mm, double t);
 
 class SimSource : public driver::ByteStreamSource {
  public:
-  explicit SimSource(SimSourceOptions options, std::string uri_text = {});
+  explicit SimSource(SimSourceSettings options, std::string uri_text = {});
   ~SimSource() override;
 
  protected:
@@ -63,7 +63,7 @@ class SimSource : public driver::ByteStreamSource {
  private:
   void run_textured();
 
-  SimSourceOptions options_;
+  SimSourceSettings options_;
   std::unique_ptr<Renderer> renderer_;
   std::unique_ptr<TexturedRenderer> textured_;
 };

@@ -26,7 +26,7 @@
 
 namespace naneye::recon {
 
-struct OpenCvPathOptions {
+struct OpenCvPathSettings {
   BoardGeometry board;
   int subpix_half_window = 3;  // cornerSubPix winSize = (h, h): a (2h+1) x (2h+1) window
 };
@@ -49,6 +49,6 @@ struct OpenCvPathResult {
 // The whole OpenCV path for one raw stereo pair (mono or GRBG Bayer: the luminance comes from
 // raw_to_luminance, as for our detector, so both paths see the same pixels).
 OpenCvPathResult opencv_reconstruct_pair(const StereoRig& rig, const RawImageView& left,
-                                         const RawImageView& right, const OpenCvPathOptions& options = {});
+                                         const RawImageView& right, const OpenCvPathSettings& options = {});
 
 }  // namespace naneye::recon

@@ -24,7 +24,7 @@
 
 namespace naneye::recon {
 
-struct DivisionHomographyOptions {
+struct DivisionHomographySettings {
   bool refine = true;  // LM on the symmetric transfer error after the linear solve
   int max_iterations = 200;
 };
@@ -41,7 +41,7 @@ struct DivisionHomography {
 // One plane: corresponding distorted points (model coordinates), at least 8 of them.
 DivisionHomography estimate_division_homography(std::span<const Eigen::Vector2d> left,
                                                 std::span<const Eigen::Vector2d> right,
-                                                const DivisionHomographyOptions& opt = {});
+                                                const DivisionHomographySettings& opt = {});
 
 struct PlaneCorrespondences {
   std::vector<Eigen::Vector2d> left, right;  // model coordinates, same order
@@ -57,6 +57,6 @@ struct DivisionLambdas {
 
 // Several planes, one lambda per camera shared by all of them.
 DivisionLambdas estimate_division_lambdas(std::span<const PlaneCorrespondences> planes,
-                                          const DivisionHomographyOptions& opt = {});
+                                          const DivisionHomographySettings& opt = {});
 
 }  // namespace naneye::recon
