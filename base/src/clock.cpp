@@ -4,10 +4,17 @@
 
 namespace naneye::base {
 
-std::int64_t monotonic_ns() {
+namespace {
+
+std::int64_t clock_ns(clockid_t id) {
   timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
+  clock_gettime(id, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
+
+}  // namespace
+
+std::int64_t monotonic_ns() { return clock_ns(CLOCK_MONOTONIC); }
+std::int64_t wall_ns() { return clock_ns(CLOCK_REALTIME); }
 
 }  // namespace naneye::base

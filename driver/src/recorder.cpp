@@ -7,16 +7,11 @@
 #include <vector>
 
 #include "naneye/driver/byte_stream_source.hpp"
+#include "naneye/base/clock.hpp"
 #include "naneye/driver/neyd.hpp"
 
 namespace naneye::driver {
 namespace {
-
-std::int64_t clock_ns(clockid_t id) {
-  timespec ts{};
-  clock_gettime(id, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 std::string json_string(const std::string& s) {
   std::string out = "\"";
@@ -63,8 +58,8 @@ RecordSummary record_to_neyd(FrameSource& source, const std::string& path, const
                              const std::atomic<bool>* interrupt) {
   const SourceInfo info = source.info();
   NeydHeader h;
-  h.start_wall_ns = clock_ns(CLOCK_REALTIME);
-  h.start_monotonic_ns = clock_ns(CLOCK_MONOTONIC);
+  h.start_wall_ns = base::wall_ns();
+  h.start_monotonic_ns = base::monotonic_ns();
   usb_ids(info, h);
   h.note = "{\"uri\":" + json_string(info.uri) + ",\"kind\":" + json_string(info.kind) +
            ",\"device\":" + json_string(info.device) + "}";

@@ -6,5 +6,8 @@
 namespace naneye::base {
 
 std::int64_t monotonic_ns();
+// CLOCK_REALTIME in nanoseconds since the epoch: only to label a recording with when it was made
+// (it jumps with the system clock, so no duration is ever taken from it).
+std::int64_t wall_ns();
 
 }  // namespace naneye::base
