@@ -15,8 +15,8 @@
 #include <string>
 
 #include "../tests/corners/corner_test_util.hpp"
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/corners/coarse_grid.hpp"
+#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/corners/grid.hpp"
 
 namespace {

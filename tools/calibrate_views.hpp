@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "naneye/recon/calibrate/calibrate.hpp"
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::tools {
 

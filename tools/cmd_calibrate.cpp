@@ -1,7 +1,7 @@
 // `naneye calibrate --input URI [--input URI ...] --pattern 6x8 --square-mm 5.99 -o calib.yaml`: detect the
-// board in every pair, calibrate both cameras and the stereo pose in one bundle (naneye/recon/calibrate/calibrate.hpp),
-// print every parameter with its sigma, and write the calibration YAML that everything else reads.
-// Nothing is written when anything fails.
+// board in every pair, calibrate both cameras and the stereo pose in one bundle
+// (naneye/recon/calibrate/calibrate.hpp), print every parameter with its sigma, and write the calibration
+// YAML that everything else reads. Nothing is written when anything fails.
 #include <spdlog/spdlog.h>
 #include <cstdio>
 #include <filesystem>

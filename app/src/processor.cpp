@@ -10,7 +10,9 @@
 
 namespace naneye::app {
 
-const char* to_string(ReconMode m) { return base::enum_name(kReconModeNames, m); }
+const char* to_string(ReconMode m) {
+  return base::enum_name(kReconModeNames, m);
+}
 
 std::string ProcessorSettings::check() const {
   const recon::BoardGeometry& board = reconstructor.corners.board;

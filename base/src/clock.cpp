@@ -14,7 +14,11 @@ std::int64_t clock_ns(clockid_t id) {
 
 }  // namespace
 
-std::int64_t monotonic_ns() { return clock_ns(CLOCK_MONOTONIC); }
-std::int64_t wall_ns() { return clock_ns(CLOCK_REALTIME); }
+std::int64_t monotonic_ns() {
+  return clock_ns(CLOCK_MONOTONIC);
+}
+std::int64_t wall_ns() {
+  return clock_ns(CLOCK_REALTIME);
+}
 
 }  // namespace naneye::base

@@ -6,8 +6,8 @@
 #include <chrono>
 #include <vector>
 
-#include "naneye/driver/byte_stream_source.hpp"
 #include "naneye/base/clock.hpp"
+#include "naneye/driver/byte_stream_source.hpp"
 #include "naneye/driver/neyd.hpp"
 
 namespace naneye::driver {

@@ -10,8 +10,8 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "naneye/recon/calibrate/calibrate.hpp"
 #include "naneye/recon/calibrate/bundle.hpp"
+#include "naneye/recon/calibrate/calibrate.hpp"
 
 namespace naneye::recon {
 namespace {

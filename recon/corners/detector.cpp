@@ -100,7 +100,8 @@ bool CornerDetector::detect(const RawImageView& image, const CornerResult* previ
   row_begin_ = image.ignore_edge_rows;
   row_end_ = height_ - image.ignore_edge_rows;
   col_end_ = width_ - image.ignore_last_cols;
-  if (previous && previous->found && previous->rows == settings_.board.rows && previous->cols == settings_.board.cols) {
+  if (previous && previous->found && previous->rows == settings_.board.rows &&
+      previous->cols == settings_.board.cols) {
     // Tracking reads only the board's rows: the luminance of those (and their margin) only. A fit
     // window that reaches the band's edge fails the tracking, which then searches the whole image.
     const auto [lo, hi] = tracking_rows(*previous);

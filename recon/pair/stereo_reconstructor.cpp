@@ -21,8 +21,7 @@ StereoReconstructor::StereoReconstructor(const StereoRig& rig, const StereoRecon
     : rig_(rig),
       settings_(settings),
       left_detector_(rig.left, settings.corners),
-      right_detector_(rig.right, settings.corners) {
-}
+      right_detector_(rig.right, settings.corners) {}
 
 void StereoReconstructor::set_rig(const StereoRig& rig) {
   rig_ = rig;

@@ -107,7 +107,8 @@ TEST(Pipeline, ReloadsTheRigBetweenPairs) {
   TempDir dir;
   write_capture(dir.path / "c.raw", 20);
   daemon::Settings settings;
-  settings.processor.detect = false;  // the hand-over and publication are under test, on frames without a board
+  settings.processor.detect =
+      false;  // the hand-over and publication are under test, on frames without a board
   const auto pipeline = replay_pipeline(settings, dir.path / "c.raw", "speed=realtime&loop=1");
   pipeline->start();
   auto other = std::make_shared<recon::StereoRig>(*paper_rig());

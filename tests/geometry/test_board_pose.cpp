@@ -5,8 +5,8 @@
 #include <random>
 #include <vector>
 
-#include "naneye/recon/geometry/board_pose.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/geometry/board_pose.hpp"
 
 using namespace naneye::recon;
 

@@ -6,8 +6,8 @@
 #include <Eigen/Geometry>
 #include <cstdio>
 
-#include "naneye/recon/paper/division_triangulation.hpp"
 #include "naneye/recon/geometry/metrics.hpp"
+#include "naneye/recon/paper/division_triangulation.hpp"
 #include "naneye/recon/paper/plane_sweep.hpp"
 #include "study.hpp"
 

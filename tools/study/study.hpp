@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "naneye/recon/camera/rig.hpp"
 #include "naneye/recon/geometry/board_pose.hpp"
 #include "naneye/recon/paper/division_homography.hpp"
-#include "naneye/recon/camera/rig.hpp"
 #include "naneye/sim/presets.hpp"
 
 namespace naneye::tools::study {

@@ -3,8 +3,8 @@
 // paper Eq. 5-6) intersected with the fitted board plane of a result.
 #include <Eigen/Core>
 
-#include "naneye/recon/pair/result.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/pair/result.hpp"
 #include "naneye/recon/scene/dense.hpp"
 
 namespace naneye::daemon {

@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
-#include "naneye/daemon/latency.hpp"
 #include "naneye/app/scene_result.hpp"
+#include "naneye/daemon/latency.hpp"
 #include "naneye/daemon/source_supervisor.hpp"
 #include "naneye/driver/frame_source.hpp"
 

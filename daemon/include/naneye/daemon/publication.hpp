@@ -12,9 +12,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "naneye/daemon/pinned_slots.hpp"
 #include "naneye/app/processor.hpp"
 #include "naneye/app/scene_result.hpp"
+#include "naneye/daemon/pinned_slots.hpp"
 #include "naneye/driver/frame.hpp"
 #include "naneye/recon/pair/result.hpp"
 

@@ -15,8 +15,8 @@
 #include <optional>
 #include <string>
 
-#include "naneye/daemon/pipeline_status.hpp"
 #include "naneye/app/processor.hpp"
+#include "naneye/daemon/pipeline_status.hpp"
 #include "naneye/recon/camera/rig.hpp"
 
 namespace naneye::daemon {

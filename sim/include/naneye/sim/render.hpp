@@ -18,8 +18,8 @@
 #include <random>
 #include <vector>
 
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/corners/detector.hpp"
 #include "naneye/sim/scene.hpp"
 #include "naneye/sim/sensor.hpp"
 

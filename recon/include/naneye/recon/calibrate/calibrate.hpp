@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "naneye/recon/geometry/board_pose.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/geometry/board_pose.hpp"
 
 namespace naneye::recon {
 

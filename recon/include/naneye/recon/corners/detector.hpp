@@ -14,13 +14,13 @@
 #include <Eigen/Core>
 
 #include "naneye/recon/camera/camera_model.hpp"
-#include "naneye/recon/geometry/board.hpp"
+#include "naneye/recon/camera/undistort_map.hpp"
 #include "naneye/recon/corners/coarse_grid.hpp"
 #include "naneye/recon/corners/fast_fit.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/corners/refine.hpp"
+#include "naneye/recon/geometry/board.hpp"
 #include "naneye/recon/pair/result.hpp"
-#include "naneye/recon/camera/undistort_map.hpp"
 
 namespace naneye::recon {
 

@@ -13,8 +13,8 @@
 #include <array>
 
 #include "naneye/recon/camera/camera_model.hpp"
-#include "naneye/recon/corners/refine.hpp"
 #include "naneye/recon/camera/undistort_map.hpp"
+#include "naneye/recon/corners/refine.hpp"
 
 namespace naneye::recon {
 

@@ -5,8 +5,8 @@
 // convention's switch (column axis at 45 degrees) they may not. The stereo geometry decides: the right
 // numbering is the one whose correspondences satisfy the epipolar constraint x_r^T E x_l = 0 with
 // positive depth in both cameras.
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::recon {
 

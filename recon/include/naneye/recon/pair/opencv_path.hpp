@@ -1,6 +1,6 @@
 #pragma once
-// The reconstruction a competent OpenCV user would write for this rig (the reference our figures are compared with):
-// findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE) + cornerSubPix on each eye's luminance,
+// The reconstruction a competent OpenCV user would write for this rig (the reference our figures are compared
+// with): findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE) + cornerSubPix on each eye's luminance,
 // cv::undistortPoints with each camera's K and D (default criteria: 5 fixed-point iterations), and
 // cv::triangulatePoints with P1 = [I|0], P2 = [R|T] on the normalized coordinates. Benchmarks and
 // tests compare our path (StereoReconstructor) against it; nothing in the product uses it.

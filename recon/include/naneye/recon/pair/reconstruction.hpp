@@ -5,10 +5,10 @@
 // over the triangulated points.
 #include <span>
 
-#include "naneye/recon/geometry/board_pose.hpp"
-#include "naneye/recon/pair/result.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/geometry/board_pose.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
+#include "naneye/recon/pair/result.hpp"
 
 namespace naneye::recon {
 
@@ -23,8 +23,9 @@ struct ReconstructionSettings {
 // `obs` holds the board's corners as both eyes saw them, ids consistent between the eyes (row-major
 // over the inner grid; a corner an eye could not use has *_ok false). Fills `out` except pair and
 // timestamps; out.board_found is true when the board pose could be estimated. Allocates nothing.
-void reconstruct_pair(const StereoRig& rig, const BoardGeometry& board, const ReconstructionSettings& settings,
-                      std::span<const CornerObservation> obs, PairResult& out);
+void reconstruct_pair(const StereoRig& rig, const BoardGeometry& board,
+                      const ReconstructionSettings& settings, std::span<const CornerObservation> obs,
+                      PairResult& out);
 
 // The corner sigma this pair's own residuals support: the board-pose RMS with the 6 pose parameters
 // taken out of the degrees of freedom, sqrt(cost / (n - 6)) over the n pixel coordinates; never below

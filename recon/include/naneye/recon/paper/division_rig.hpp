@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 #include <optional>
 
-#include "naneye/recon/paper/division_model.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/paper/division_model.hpp"
 
 namespace naneye::recon {
 

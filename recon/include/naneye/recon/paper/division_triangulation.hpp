@@ -14,8 +14,8 @@
 #include <span>
 #include <vector>
 
-#include "naneye/recon/paper/division_rig.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
+#include "naneye/recon/paper/division_rig.hpp"
 
 namespace naneye::recon {
 

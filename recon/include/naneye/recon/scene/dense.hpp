@@ -12,8 +12,8 @@
 #include <memory>
 #include <vector>
 
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 

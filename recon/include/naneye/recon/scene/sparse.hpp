@@ -9,8 +9,8 @@
 #include <limits>
 #include <vector>
 
-#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/camera/rig.hpp"
+#include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/scene/epipolar_match.hpp"
 #include "naneye/recon/scene/feature_ids.hpp"
 #include "naneye/recon/scene/features.hpp"
