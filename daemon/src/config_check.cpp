@@ -1,4 +1,4 @@
-#include "naneye/daemon/config_check.hpp"
+#include "config_check.hpp"
 
 #include <sys/stat.h>
 

@@ -12,8 +12,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "http_server.hpp"
 #include "log.hpp"
-#include "naneye/daemon/http_server.hpp"
 
 namespace naneye::daemon::http {
 namespace {

@@ -7,7 +7,7 @@
 #include <algorithm>
 
 #include "http_gate.hpp"
-#include "naneye/daemon/http_server.hpp"
+#include "http_server.hpp"
 
 namespace naneye::daemon::http {
 

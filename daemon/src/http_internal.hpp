@@ -3,7 +3,7 @@
 // Eigen (through http_server.hpp) must come before httplib.h: httplib pulls in <resolv.h>, whose
 // `_res` macro would rewrite Eigen's parameter names.
 // clang-format off
-#include "naneye/daemon/http_server.hpp"
+#include "http_server.hpp"
 #include <httplib.h>
 // clang-format on
 

@@ -1,4 +1,4 @@
-#include "naneye/daemon/http_server.hpp"
+#include "http_server.hpp"
 
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>

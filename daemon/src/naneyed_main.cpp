@@ -11,11 +11,11 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "config_check.hpp"
+#include "http_server.hpp"
 #include "log.hpp"
 #include "naneye/app/processor.hpp"
 #include "naneye/app/sources.hpp"
-#include "naneye/daemon/config_check.hpp"
-#include "naneye/daemon/http_server.hpp"
 #include "naneye/daemon/pipeline.hpp"
 #include "naneye/daemon/rig_check.hpp"
 #include "naneye/daemon/settings.hpp"

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "naneye/recon/scene/dense_rectify.hpp"
+#include "dense_rectify.hpp"
 
 namespace naneye::recon::scene {
 namespace {

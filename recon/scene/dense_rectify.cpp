@@ -1,5 +1,5 @@
 // Exact rectification maps for the dense path (dense_rectify.hpp).
-#include "naneye/recon/scene/dense_rectify.hpp"
+#include "dense_rectify.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "naneye/recon/scene/interpolate.hpp"
+#include "interpolate.hpp"
 
 namespace naneye::recon::scene {
 

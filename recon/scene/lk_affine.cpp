@@ -6,7 +6,7 @@
 #include <array>
 #include <cmath>
 
-#include "naneye/recon/scene/interpolate.hpp"
+#include "interpolate.hpp"
 
 namespace naneye::recon::scene {
 namespace {
