@@ -6,6 +6,7 @@
 #include <chrono>
 #include <thread>
 
+#include "../support/wait_until.hpp"
 #include "naneye/driver/source_registry.hpp"
 #include "naneye/driver/usb_source.hpp"
 #include "naneye/driver/wire_format.hpp"
@@ -71,15 +72,7 @@ UsbSourceSettings settings_for(const UsbDeviceSpec& spec, int count, int size) {
   return s;
 }
 
-template <class F>
-bool wait_until(F f, int timeout_ms = 10000) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (!f()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
-}
+using naneye::test::wait_until;
 
 }  // namespace
 

@@ -12,6 +12,7 @@
 #include <random>
 #include <thread>
 
+#include "../support/wait_until.hpp"
 #include "naneye/driver/usb_transport.hpp"
 #include "usb_emulator.hpp"
 
@@ -51,15 +52,7 @@ std::vector<std::uint8_t> random_bytes(std::size_t n, unsigned seed) {
   return v;
 }
 
-template <class F>
-bool wait_until(F f, int timeout_ms = 10000) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (!f()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
-}
+using naneye::test::wait_until;
 
 UsbTransportSettings settings_for(const UsbDeviceSpec& spec, int count, int size) {
   UsbTransportSettings s;
