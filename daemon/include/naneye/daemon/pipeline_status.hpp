@@ -46,7 +46,7 @@ struct PipelineStatus {
   struct Scene {
     int features = 0, valid_points = 0;
     double noise_sigma_dn = 0;
-    std::optional<DepthSummary> depth;  // empty without a dense map
+    std::optional<app::DepthSummary> depth;  // empty without a dense map
   };
   std::optional<Scene> scene;
   std::uint64_t scene_pairs = 0, scene_valid_points = 0, dense_pairs = 0;  // totals since the start

@@ -23,7 +23,7 @@ namespace naneye::daemon {
 // One published result with the times the service adds to it.
 struct Published {
   recon::PairResult result;
-  SceneResult scene;              // empty (computed = false) in [recon] mode board
+  app::SceneResult scene;         // empty (computed = false) in [recon] mode board
   std::uint64_t seq = 0;          // 1, 2, 3... per processed pair: the /v1/events id
   std::int64_t capture_ns = 0;    // CLOCK_MONOTONIC when the pair's last record arrived
   std::int64_t published_ns = 0;  // CLOCK_MONOTONIC when it was published
@@ -43,7 +43,7 @@ class Publication {
  public:
   // `history` results are kept for readers (plus two being written and read); `processor` sizes
   // every slot's buffers.
-  Publication(std::size_t history, int frame_snapshot_interval_ms, const PairProcessor& processor);
+  Publication(std::size_t history, int frame_snapshot_interval_ms, const app::PairProcessor& processor);
   Publication(const Publication&) = delete;
   Publication& operator=(const Publication&) = delete;
 
@@ -51,8 +51,8 @@ class Publication {
   // processor, a map slot (or the scratch map).
   struct Write {
     Published* result = nullptr;
-    DepthSlot* depth = nullptr;  // null when the processor makes no dense map
-    bool publishable = false;    // result is a slot, not the scratch
+    app::DepthSlot* depth = nullptr;  // null when the processor makes no dense map
+    bool publishable = false;         // result is a slot, not the scratch
   };
   Write begin(bool dense);
   // Tags and publishes the map (if the result has one), then the result as `seq` (stamping its
@@ -63,15 +63,15 @@ class Publication {
 
   const PinnedSlots<Published>& results() const { return results_; }
   const PinnedSlots<FrameSnapshot>& frames() const { return frames_; }
-  const PinnedSlots<DepthSlot>& depth_maps() const { return depth_maps_; }
+  const PinnedSlots<app::DepthSlot>& depth_maps() const { return depth_maps_; }
 
  private:
   std::int64_t frame_interval_ns_;
   PinnedSlots<Published> results_;
   PinnedSlots<FrameSnapshot> frames_;
-  PinnedSlots<DepthSlot> depth_maps_;
-  Published scratch_;        // used when every slot is pinned, so processing never waits
-  DepthSlot depth_scratch_;  // the same for the dense map
+  PinnedSlots<app::DepthSlot> depth_maps_;
+  Published scratch_;             // used when every slot is pinned, so processing never waits
+  app::DepthSlot depth_scratch_;  // the same for the dense map
   std::int64_t last_frames_ns_ = 0;
 };
 

@@ -28,13 +28,13 @@ class RigReload {
 
   // `prepared` (may be null) is a processor already set to `rig`; an earlier offer not yet taken is
   // replaced: the newest wins.
-  void offer(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared);
+  void offer(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<app::PairProcessor> prepared);
   // A reload refused before reaching the pipeline (or by the processing step); the rig in use stays.
   void refused(std::string reason);
   std::shared_ptr<const recon::StereoRig> rig() const;
 
   // Worker, between two pairs: applies a pending reload to `processor` (whose name() is `name`).
-  void apply_pending(std::unique_ptr<PairProcessor>& processor, std::string_view name);
+  void apply_pending(std::unique_ptr<app::PairProcessor>& processor, std::string_view name);
   // calibration_reloads, calibration_reload_failures, last_reload.
   void fill(PipelineStatus& s) const;
 
@@ -44,7 +44,7 @@ class RigReload {
   std::chrono::steady_clock::time_point started_;
   mutable std::mutex mu_;  // HTTP readers and reloads only; the worker takes it once per reload
   std::shared_ptr<const recon::StereoRig> rig_;
-  std::unique_ptr<PairProcessor> prepared_;  // guarded by mu_: offer()'s, for the worker to take
+  std::unique_ptr<app::PairProcessor> prepared_;  // guarded by mu_: offer()'s, for the worker to take
   std::atomic<bool> pending_{false};
   std::shared_ptr<const recon::StereoRig> applied_;  // worker only: the rig the processor has
   mutable std::mutex outcome_mu_;                    // guards last_ (a reload's outcome, rare)
