@@ -4,7 +4,8 @@
 
 namespace naneye::daemon {
 
-Publication::Publication(std::size_t history, int frame_snapshot_interval_ms, const PairProcessor& processor)
+Publication::Publication(std::size_t history, int frame_snapshot_interval_ms,
+                         const app::PairProcessor& processor)
     : frame_interval_ns_(std::int64_t{frame_snapshot_interval_ms} * 1'000'000),
       results_(history + 2),
       // A PNG encode pins a frame slot for a few ms; four slots keep the worker from ever skipping.
@@ -15,7 +16,7 @@ Publication::Publication(std::size_t history, int frame_snapshot_interval_ms, co
   results_.prepare([&processor](Published& p) { processor.reserve(p.scene, nullptr); });
   processor.reserve(scratch_.scene, &depth_scratch_.map);
   if (processor.dense())
-    depth_maps_.prepare([this, &processor](DepthSlot& d) { processor.reserve(scratch_.scene, &d.map); });
+    depth_maps_.prepare([this, &processor](app::DepthSlot& d) { processor.reserve(scratch_.scene, &d.map); });
 }
 
 Publication::Write Publication::begin(bool dense) {

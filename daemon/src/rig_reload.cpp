@@ -12,7 +12,8 @@ double RigReload::uptime_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
 }
 
-void RigReload::offer(std::shared_ptr<const recon::StereoRig> rig, std::unique_ptr<PairProcessor> prepared) {
+void RigReload::offer(std::shared_ptr<const recon::StereoRig> rig,
+                      std::unique_ptr<app::PairProcessor> prepared) {
   {
     std::lock_guard lock(mu_);
     rig_ = std::move(rig);
@@ -33,10 +34,10 @@ std::shared_ptr<const recon::StereoRig> RigReload::rig() const {
   return rig_;
 }
 
-void RigReload::apply_pending(std::unique_ptr<PairProcessor>& processor, std::string_view name) {
+void RigReload::apply_pending(std::unique_ptr<app::PairProcessor>& processor, std::string_view name) {
   if (!pending_.exchange(false)) return;
   std::shared_ptr<const recon::StereoRig> next;
-  std::unique_ptr<PairProcessor> prepared;
+  std::unique_ptr<app::PairProcessor> prepared;
   {
     std::lock_guard lock(mu_);
     next = rig_;
