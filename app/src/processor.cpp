@@ -10,23 +10,6 @@
 
 namespace naneye::app {
 
-const char* to_string(ReconMode m) {
-  return base::enum_name(kReconModeNames, m);
-}
-
-std::string ProcessorSettings::check() const {
-  const recon::BoardGeometry& board = reconstructor.corners.board;
-  // BoardGeometry names its field ("rows and cols: ...", "square_mm: ..."): the keys of [board].
-  if (const auto why = board.check(); !why.empty()) return "board." + why;
-  if (board.count() > recon::kMaxCorners)
-    return "board.rows, board.cols: at most " + std::to_string(recon::kMaxCorners) + " inner corners, got " +
-           std::to_string(board.rows) + " x " + std::to_string(board.cols);
-  if (!(reconstructor.reconstruction.corner_sigma_px > 0))
-    return "pipeline.corner_sigma_px: must be above 0, got " +
-           std::to_string(reconstructor.reconstruction.corner_sigma_px);
-  return {};
-}
-
 void fill_pair_identity(const driver::StereoPair& pair, recon::PairResult& out) {
   out.pair = pair.index;
   out.t_left_ns = pair.left.sensor_ns;
