@@ -18,6 +18,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using base::monotonic_ns;
 
+// After a hotplug arrival: up to 5 tries 50 ms apart (250 ms, a few times udev's usual rule run and
+// a short bring-up) before the ordinary backoff takes over again.
+constexpr int kSettleTries = 5;
+constexpr std::chrono::milliseconds kSettleDelay{50};
+
 }  // namespace
 
 struct UsbTransport::Impl {
@@ -39,6 +44,9 @@ struct UsbTransport::Impl {
   std::thread thread;
   std::atomic<bool> stopping{false};
   std::atomic<bool> arrived{false};
+  // Tries left at the short settle delay after an arrival: udev applies the node's permissions and
+  // a bring-up may still be running when the event comes, so the first open or claim can fail.
+  int settle_tries = 0;
   std::vector<Slot> slots;
   int active = 0;
   bool lost = false;        // the board went away: drop it and wait for it
@@ -214,10 +222,21 @@ struct UsbTransport::Impl {
     while (!stopping) {
       if (!handle) {
         set_state(SourceState::waiting_for_device);
-        if (arrived.exchange(false)) next_try = Clock::now();
+        if (arrived.exchange(false)) {
+          next_try = Clock::now();
+          settle_tries = kSettleTries;
+        }
         if (Clock::now() >= next_try) {
-          if (connect()) continue;
-          next_try = Clock::now() + backoff.failed(last_why);
+          if (connect()) {
+            settle_tries = 0;
+            continue;
+          }
+          auto delay = backoff.failed(last_why);
+          if (settle_tries > 0) {
+            --settle_tries;
+            delay = std::min(delay, kSettleDelay);
+          }
+          next_try = Clock::now() + delay;
         }
         const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(next_try - Clock::now());
         pump(std::clamp(wait, std::chrono::milliseconds(1), std::chrono::milliseconds(100)));

@@ -192,6 +192,30 @@ TEST(UsbTransport, HotplugArrivalCutsTheBackoffShort) {
   EXPECT_EQ(t.counters().reconnects, 1u);
 }
 
+// A board that is not ready when its arrival event comes (claim refused twice) is still taken within
+// the settle tries, not after the 20 s backoff.
+TEST(UsbTransport, ArrivalRetriesAClaimWhileTheBoardSettles) {
+  if (!libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) GTEST_SKIP() << "libusb without hotplug: polling only";
+  UsbEmulator emu;
+  UsbDeviceSpec spec;
+  emu.plug(spec, random_bytes(20'000, 17));
+  emu.unplug_after(20'000);
+  CollectingSink sink;
+  auto s = settings_for(spec, 4, 4096);
+  s.backoff.initial_ms = 20'000;
+  s.backoff.max_ms = s.backoff.initial_ms;
+  UsbTransport t(s, sink);
+  t.start();
+  ASSERT_TRUE(emu.wait_unplugged(10000));
+  ASSERT_TRUE(wait_until([&] { return t.state() == SourceState::waiting_for_device; }));
+  emu.refuse_claims(2, EBUSY);
+  spec.address = 7;
+  emu.plug(spec, random_bytes(10'000, 18));
+  ASSERT_TRUE(wait_until([&] { return sink.size() == 30'000; }, 5000)) << "the settle tries gave up";
+  EXPECT_EQ(t.counters().reconnects, 1u);
+  EXPECT_EQ(emu.claims_refused(), 2);
+}
+
 TEST(UsbTransport, EndpointStallIsClearedInPlace) {
   UsbEmulator emu;
   UsbDeviceSpec spec;

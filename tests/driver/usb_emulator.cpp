@@ -102,7 +102,11 @@ void UsbEmulator::plug(const UsbDeviceSpec& spec, std::vector<std::uint8_t> stre
     pos_ = 0;
     served_ = 0;
     unplug_at_ = SIZE_MAX;
-    gone_ = true;  // until the new node file exists: a client must not open the old one and succeed
+    // The node file was unlinked at the unplug and only add_from_string() below creates it again, so
+    // no client can open it early. The device must count as present before that call: it sends the
+    // "add" uevent itself, and a hotplug-driven claim can arrive before it returns (a claim refused
+    // with ENODEV there made HotplugArrivalCutsTheBackoffShort flaky under load).
+    gone_ = false;
     claimed_ = false;
     present_ = true;
   }
@@ -130,8 +134,6 @@ void UsbEmulator::plug(const UsbDeviceSpec& spec, std::vector<std::uint8_t> stre
     g_clear_error(&err);
     throw std::runtime_error("umockdev_testbed_add_from_string: " + msg);
   }
-  std::lock_guard lock(mutex_);
-  gone_ = false;
 }
 
 void UsbEmulator::unplug_after(std::size_t after_bytes) {
@@ -167,6 +169,17 @@ void UsbEmulator::fail_transfer_at(std::size_t at, int status, std::size_t lost)
   fail_at_ = at;
   fail_status_ = status;
   fail_lost_ = lost;
+}
+
+void UsbEmulator::refuse_claims(int count, int error) {
+  std::lock_guard lock(mutex_);
+  refuse_claims_ = count;
+  refuse_error_ = error;
+}
+
+int UsbEmulator::claims_refused() const {
+  std::lock_guard lock(mutex_);
+  return claims_refused_;
 }
 
 bool UsbEmulator::wait_unplugged(int timeout_ms) {
@@ -234,6 +247,12 @@ bool UsbEmulator::handle(UMockdevIoctlClient* client) {
     }
     case USBDEVFS_CLAIMINTERFACE:
     case USBDEVFS_DISCONNECT_CLAIM:  // libusb's auto-detach claims this way
+      if (refuse_claims_ > 0) {
+        --refuse_claims_;
+        ++claims_refused_;
+        umockdev_ioctl_client_complete(client, -1, refuse_error_);
+        return true;
+      }
       claimed_ = true;
       umockdev_ioctl_client_complete(client, 0, 0);
       return true;

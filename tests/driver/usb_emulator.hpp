@@ -49,6 +49,10 @@ class UsbEmulator {
   // The bulk URB that would carry stream byte `at` completes with `status` (e.g. -EPROTO) instead,
   // and `lost` bytes of the stream vanish with it, as on a damaged bus.
   void fail_transfer_at(std::size_t at, int status, std::size_t lost);
+  // The next `count` interface claims fail with `error` (EBUSY: a board still settling after it
+  // arrived, its bring-up or udev rule not done yet).
+  void refuse_claims(int count, int error);
+  int claims_refused() const;
 
   // Figures the tests check.
   std::size_t bytes_served() const;
@@ -93,6 +97,7 @@ class UsbEmulator {
   std::size_t max_in_flight_ = 0;
   std::size_t discarded_ = 0;
   bool claimed_ = false;
+  int refuse_claims_ = 0, refuse_error_ = 0, claims_refused_ = 0;
   std::size_t clear_halts_ = 0;
   std::vector<ControlRecord> controls_;
   std::size_t served_ = 0;
