@@ -1,15 +1,14 @@
 #include "naneye/recon/camera/calibration_io.hpp"
 
 #include <Eigen/LU>
-#include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <optional>
 #include <sstream>
+
+#include "calibration_yaml.hpp"
 
 namespace naneye::recon {
 namespace {
@@ -38,65 +37,17 @@ class Keys {
  public:
   void read(const std::filesystem::path& path) {
     const std::string file = path.string();
-    if (!std::filesystem::exists(path)) throw CalibrationError(file + ": file not found");
-    // A NUL byte is never in a FileStorage text (YAML, XML, JSON), and OpenCV 4.6's reader loops
-    // forever on one (fuzz_calib_yaml: a 492-byte file held FileStorage::open for minutes).
-    {
-      std::ifstream in(path, std::ios::binary);
-      if (std::find(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\0') !=
-          std::istreambuf_iterator<char>())
-        throw CalibrationError(file + ": holds a NUL byte: not an OpenCV FileStorage text file");
-    }
-    cv::FileStorage fs;
-    try {
-      if (!fs.open(file, cv::FileStorage::READ)) throw CalibrationError(file + ": cannot be opened");
-    } catch (const cv::Exception& e) {
-      throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.err);
-    } catch (const std::exception& e) {
-      // OpenCV's parser passes on what its own code throws (std::length_error for a length it
-      // computed from a damaged file, found by fuzz_calib_yaml).
-      throw CalibrationError(file + ": not an OpenCV FileStorage file: " + e.what());
-    }
-    const cv::FileNode root = fs.root();
-    // OpenCV's own reading of a damaged file can throw from anywhere in the walk (FileNode::name()
-    // asserted on a file the fuzzer wrote): every such failure is this file's, and said so.
-    try {
-      for (auto it = root.begin(); it != root.end(); ++it) {
-        const cv::FileNode node = *it;
-        const std::string key = node.name();
-        cv::Mat m;
-        try {
-          if (node.isInt() || node.isReal()) {
-            m = cv::Mat(1, 1, CV_64F, cv::Scalar(static_cast<double>(node)));
-          } else if (node.isMap() && !node["data"].empty()) {
-            const int rows = static_cast<int>(node["rows"]), cols = static_cast<int>(node["cols"]);
-            const std::size_t given = node["data"].size();
-            if (rows < 1 || cols < 1 || given != static_cast<std::size_t>(rows) * cols)
-              fail(file, key,
-                   "data has " + std::to_string(given) + " values but rows x cols is " +
-                       std::to_string(rows) + "x" + std::to_string(cols));
-            node >> m;
-          } else {
-            continue;  // strings, comments and other keys that are not ours
-          }
-        } catch (const cv::Exception& e) {
-          fail(file, key, "not a matrix: " + e.err);
-        }
-        if (m.empty()) fail(file, key, "empty matrix");
-        m.convertTo(m, CV_64F);
-        if (auto found = entries_.find(key); found != entries_.end()) {
-          if (!same(found->second.value, m))
-            fail(file, key, "given again with a different value (first in " + found->second.file + ")");
-          continue;
-        }
-        entries_[key] = Entry{m, file};
+    for (detail::YamlKey& k : detail::read_calibration_yaml(path)) {
+      if (k.value.empty()) {
+        not_ours_.emplace(k.key, file + ": key '" + k.key + "': " + k.skipped);
+        continue;
       }
-    } catch (const cv::Exception& e) {
-      throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.err);
-    } catch (const CalibrationError&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw CalibrationError(file + ": not a readable OpenCV FileStorage file: " + e.what());
+      if (auto found = entries_.find(k.key); found != entries_.end()) {
+        if (!same(found->second.value, k.value))
+          fail(file, k.key, "given again with a different value (first in " + found->second.file + ")");
+        continue;
+      }
+      entries_[k.key] = Entry{std::move(k.value), file};
     }
   }
 
@@ -107,12 +58,18 @@ class Keys {
 
   const Entry& require(const std::string& key, const std::string& files) const {
     const Entry* e = find(key);
-    if (!e) fail(files, key, "missing");
-    return *e;
+    if (e) return *e;
+    // Present but a string or a sequence: say so rather than "missing".
+    if (auto it = not_ours_.find(key); it != not_ours_.end())
+      throw CalibrationError(it->second + ", which is not a number or an opencv-matrix");
+    fail(files, key, "missing");
   }
 
  private:
   std::map<std::string, Entry> entries_;
+  // Keys whose values are not numbers or matrices (the first occurrence of each): what require()
+  // says, naming the file and the key, when one of them is needed.
+  std::map<std::string, std::string> not_ours_;
 };
 
 void require_finite(const Entry& e, const std::string& key) {

@@ -60,6 +60,11 @@ int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col
   const int r0 = std::max(row - 1, 0), r1 = std::min(row + 1, r.rows - 1);
   const Eigen::Vector2d dc = (r.at(row, c1).px - r.at(row, c0).px) / (c1 - c0);
   const Eigen::Vector2d dr = (r.at(r1, col).px - r.at(r0, col).px) / (r1 - r0);
+  return quadrant_polarity(img, p, dc, dr);
+}
+
+int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& dc,
+                      const Eigen::Vector2d& dr) {
   // Quadrant centres at 0.35 of the spacing along each diagonal; for a corner near the image border
   // (every corner in view, but the outer squares cut by the edge) closer, down to 0.18, as long as the
   // samples stay >= 2.5 px from the corner (outside its blur, a few tenths of a pixel here).

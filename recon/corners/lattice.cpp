@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "naneye/recon/corners/coarse_grid.hpp"
+#include "naneye/recon/corners/grid.hpp"
 
 namespace naneye::recon {
 
@@ -149,46 +150,66 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   // The pattern must sit in the component at exactly one place (either way round): two places means
   // a larger board (nothing is certain), none means part of a board (cut by the edge, or a saddle
   // missed). A few cells beyond it are false links (the border squares' outer corners under strong
-  // distortion can pass the ring test) and are left out. A placement is certain when every cell of the
-  // component outside it is a false link (at most kMaxStrayCells of them) or not an X-junction: its ring
-  // symmetry (second over first harmonic) below max_outer_symmetry, where every inner corner of the placement
-  // is above it.
+  // distortion can pass the ring test) and are left out. Beyond kMaxStrayCells, the component holds
+  // the border squares' outer corners (L- and T-junctions against the margin) or clutter: a placement
+  // then counts only when every corner in it is an X-junction by the quadrant test (the one the
+  // validation applies after the fit: both quadrants of one diagonal brighter than both of the other,
+  // alternating over the grid), and it is uncertain when more than kMaxStrayCells cells beside it are
+  // X-junctions of the same alternation too (a larger board's next row).
+  // A cell's grid steps in raw pixels from its neighbours in the component (one-sided at its edge).
+  auto steps = [&](int i, int j, Eigen::Vector2d& dc, Eigen::Vector2d& dr) {
+    auto px = [&](int ii, int jj) { return cand_[static_cast<std::size_t>(at(ii, jj))].px.cast<double>(); };
+    auto axis = [&](int di, int dj, Eigen::Vector2d& d) {
+      const bool fwd = at(i + di, j + dj) >= 0, back = at(i - di, j - dj) >= 0;
+      if (fwd && back)
+        d = 0.5 * (px(i + di, j + dj) - px(i - di, j - dj));
+      else if (fwd)
+        d = px(i + di, j + dj) - px(i, j);
+      else if (back)
+        d = px(i, j) - px(i - di, j - dj);
+      return fwd || back;
+    };
+    return axis(1, 0, dc) && axis(0, 1, dr);
+  };
+  // Quadrant polarity of every cell (0: no X-junction, or no neighbour to measure its steps by),
+  // times the lattice's alternation, so that all X-junctions of one board share one sign.
+  std::array<int, kMaxCells> sign{};
+  for (int k = 0; k < n; ++k) {
+    const int ci = cells[static_cast<std::size_t>(k)][0], cj = cells[static_cast<std::size_t>(k)][1];
+    Eigen::Vector2d dc, dr;
+    const int pol =
+        steps(ci, cj, dc, dr)
+            ? quadrant_polarity(*img_, cand_[static_cast<std::size_t>(at(ci, cj))].px.cast<double>(), dc, dr)
+            : 0;
+    sign[static_cast<std::size_t>(k)] = (ci + cj) % 2 == 0 ? pol : -pol;
+  }
   int placements = 0, uncertain = 0, pi = 0, pj = 0;
   bool p_i_is_col = true;
   for (int orient = 0; orient < (rows == cols ? 1 : 2); ++orient) {
     const int w = orient == 0 ? cols : rows, h = orient == 0 ? rows : cols;
     for (int j = j0; j + h - 1 <= j1; ++j) {
       for (int i = i0; i + w - 1 <= i1; ++i) {
-        bool complete = true;
-        float inner = 1e30f;
-        for (int jj = j; jj < j + h && complete; ++jj) {
-          for (int ii = i; ii < i + w; ++ii) {
-            const int c = at(ii, jj);
-            if (c < 0) {
-              complete = false;
-              break;
-            }
-            inner = std::min(inner, cand_[static_cast<std::size_t>(c)].symmetry);
-          }
-        }
-        if (!complete) continue;
-        // The component's cells next to the placement (a row or column beyond it) that are
-        // X-junctions: a larger board's next row. Its L- and T-junctions (the border squares'
-        // outer corners) and links further out (clutter) do not make another placement.
-        int adjacent_x = 0, outside = 0;
+        int inside = 0, sum = 0, outside = 0;
         for (int k = 0; k < n; ++k) {
           const int ci = cells[static_cast<std::size_t>(k)][0], cj = cells[static_cast<std::size_t>(k)][1];
-          if (ci >= i && ci < i + w && cj >= j && cj < j + h) continue;
-          ++outside;
-          const bool next = ci >= i - 1 && ci <= i + w && cj >= j - 1 && cj <= j + h;
-          adjacent_x += next && cand_[static_cast<std::size_t>(at(ci, cj))].symmetry >= s_.max_outer_symmetry;
+          if (ci >= i && ci < i + w && cj >= j && cj < j + h) {
+            ++inside;
+            sum += sign[static_cast<std::size_t>(k)];
+          } else {
+            ++outside;
+          }
         }
-        // Up to kMaxStrayCells cells beyond the pattern are false links, whatever they look like.
-        // Beyond that, the placement must be all X-junctions (a placement over a row of L-corners
-        // is not the pattern) with at most kMaxStrayCells X-junctions beside it (more: a larger
-        // board's next row, nothing is certain).
+        if (inside < w * h) continue;
         if (outside > kMaxStrayCells) {
-          if (inner < s_.max_outer_symmetry) continue;
+          if (std::abs(sum) < w * h) continue;  // an L- or T-junction (or a wrong sign) in it
+          const int board_sign = sum > 0 ? 1 : -1;
+          int adjacent_x = 0;
+          for (int k = 0; k < n; ++k) {
+            const int ci = cells[static_cast<std::size_t>(k)][0], cj = cells[static_cast<std::size_t>(k)][1];
+            const bool in = ci >= i && ci < i + w && cj >= j && cj < j + h;
+            const bool next = ci >= i - 1 && ci <= i + w && cj >= j - 1 && cj <= j + h;
+            adjacent_x += !in && next && sign[static_cast<std::size_t>(k)] == board_sign;
+          }
           if (adjacent_x > kMaxStrayCells) {
             ++uncertain;
             continue;
@@ -216,6 +237,7 @@ bool CoarseGridFinder::find(const LumaView& img, int rows, int cols, Eigen::Vect
                             const NoiseModel* noise) {
   count_ = 0;
   noise_ = noise;
+  img_ = &img;
   if (img.width != width_ || img.height != height_ || rows < 2 || cols < 2 || rows * cols > kMaxCorners) {
     return false;
   }

@@ -139,11 +139,9 @@ bool CoarseGridFinder::ring_test(const LumaView& img, SaddleCandidate& c) const 
     return false;
   }
   float a1 = 0, b1 = 0, a2 = 0, b2 = 0;
-  std::array<float, 16> ring;
   for (int k = 0; k < 16; ++k) {
     const float cs = kRingCos[static_cast<std::size_t>(k)], sn = ring_sin(k);
     const float f = bilinear(smooth_.data(), width_, c.px.x() + rad * cs, c.px.y() + rad * sn);
-    ring[static_cast<std::size_t>(k)] = f;
     a1 += f * cs;
     b1 += f * sn;
     a2 += f * (cs * cs - sn * sn);
@@ -151,17 +149,6 @@ bool CoarseGridFinder::ring_test(const LumaView& img, SaddleCandidate& c) const 
   }
   const float h1 = std::hypot(a1, b1), h2 = std::hypot(a2, b2);
   c.phase = {a2, b2};
-  // Point symmetry: the ring's variation over the part of it that a half turn changes. An
-  // X-junction is its own half turn (every odd harmonic vanishes); an L- or T-junction is not,
-  // whatever the grey of the margin beside it.
-  float mean = 0;
-  for (const float f : ring) mean += f * (1.0f / 16);
-  float var = 0, odd = 0;
-  for (std::size_t k = 0; k < 16; ++k) {
-    var += (ring[k] - mean) * (ring[k] - mean);
-    if (k < 8) odd += 0.5f * (ring[k] - ring[k + 8]) * (ring[k] - ring[k + 8]);
-  }
-  c.symmetry = std::sqrt(var / std::max(2.0f * odd, 1e-6f));
   const float level = bilinear(smooth_.data(), width_, c.px.x(), c.px.y());
   const float min_amp = noise_ ? s_.min_ring_snr * std::sqrt(static_cast<float>(noise_->variance(level)))
                                : s_.min_ring_amplitude_dn;

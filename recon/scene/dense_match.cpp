@@ -14,28 +14,25 @@ constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 
 cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
   // P1, P2: the penalties OpenCV documents for 8-bit images (8 and 32 x channels x block area);
-  // no uniqueness, left-right or speckle filtering: validity is decided after the sub-pixel step.
+  // no uniqueness or speckle filtering: validity is decided after the sub-pixel step. The
+  // left-right check is SGBM's own (disp12MaxDiff): the right view's disparities are the minima of
+  // the same aggregated cost along each right pixel's diagonal, so one run gives both views (a
+  // second run on the mirrored pair cost as much as the first and refused no more, docs/scene.md).
   const int area = s.sgm_block * s.sgm_block;
-  return cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block, 8 * area, 32 * area, -1, 0,
+  const int lr = std::max(0, static_cast<int>(std::lround(s.lr_tolerance_px)));
+  return cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block, 8 * area, 32 * area, lr, 0,
                                 0, 0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
 }
 }  // namespace
 
 RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings& s)
     : s_(s), w_(width), h_(height) {
-  sgbm_l_ = make_sgbm(s_);
-  // The mirrored pair (right image first, both flipped) gives the right view's disparities with
-  // the same band.
-  sgbm_r_ = make_sgbm(s_);
+  sgbm_ = make_sgbm(s_);
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   l8_.create(h_, w_, CV_8UC1);
   r8_.create(h_, w_, CV_8UC1);
-  l8f_.create(h_, w_, CV_8UC1);
-  r8f_.create(h_, w_, CV_8UC1);
   d16_.create(h_, w_, CV_16SC1);
-  d16r_.create(h_, w_, CV_16SC1);
-  sgbm_.create(h_, w_, CV_32FC1);
-  sgbm_right_.create(h_, w_, CV_32FC1);
+  integer_.create(h_, w_, CV_32FC1);
   disp_.create(h_, w_, CV_32FC1);
   sigma_.create(h_, w_, CV_32FC1);
   for (auto* v : {&d_, &a_, &b_, &c_, &s2_, &kappa_px_, &n_, &z_, &smooth_step_}) v->assign(n, 0.f);
@@ -44,7 +41,6 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   line_.assign(2 * static_cast<std::size_t>(std::max(w_, h_) + 1), 0.f);
   scratch_.assign(n, 0.f);
   line_copy_.assign(n, 0.f);
-  acc_.assign(static_cast<std::size_t>(std::max(w_, h_)), 0.0);
   rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
 }
 
@@ -73,21 +69,12 @@ void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, 
   const double scale = 255.0 / hi;
   left.convertTo(l8_, CV_8U, scale);
   right.convertTo(r8_, CV_8U, scale);
-  sgbm_l_->compute(l8_, r8_, d16_);
-  cv::flip(r8_, l8f_, 1);
-  cv::flip(l8_, r8f_, 1);
-  sgbm_r_->compute(l8f_, r8f_, d16r_);
+  sgbm_->compute(l8_, r8_, d16_);
   const int invalid = (s_.min_disparity - 1) * 16;
   for (int y = 0; y < h_; ++y) {
     const short* dl = d16_.ptr<short>(y);
-    const short* dr = d16r_.ptr<short>(y);
-    float* ol = sgbm_.ptr<float>(y);
-    float* orr = sgbm_right_.ptr<float>(y);
-    for (int x = 0; x < w_; ++x) {
-      ol[x] = dl[x] <= invalid ? kNan : dl[x] / 16.f;
-      const short v = dr[w_ - 1 - x];
-      orr[x] = v <= invalid ? kNan : v / 16.f;
-    }
+    float* ol = integer_.ptr<float>(y);
+    for (int x = 0; x < w_; ++x) ol[x] = dl[x] <= invalid ? kNan : dl[x] / 16.f;
   }
 }
 
@@ -171,10 +158,10 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
   level_medians(min_n);
   const double zq = upper_normal_quantile(s_.residual_p);
   MatchCounts c;
+  const int matchable_from = s_.min_disparity + s_.num_disparities;
   for (int y = 0; y < h_; ++y) {
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
-    const float* sg = sgbm_.ptr<float>(y);
-    const float* sr = sgbm_right_.ptr<float>(y);
+    const float* sg = integer_.ptr<float>(y);
     float* od = disp_.ptr<float>(y);
     float* os = sigma_.ptr<float>(y);
     for (int x = 0; x < w_; ++x) {
@@ -185,7 +172,9 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       ++c.candidates;
       const float d = d_[i];
       if (!std::isfinite(sg[x])) {
-        ++c.no_integer;
+        // SGBM matches every column from min + number of disparities on (no uniqueness or speckle
+        // filter): a pixel it left without one there failed its left-right check.
+        ++(x >= matchable_from ? c.left_right : c.no_integer);
         continue;
       }
       if (!std::isfinite(d) || n_[i] < min_n || !(a_[i] > 0)) {
@@ -211,12 +200,6 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       const double t = 1 - 2 / (9 * nu) + zq * std::sqrt(2 / (9 * nu));
       if (s2_[i] > expected_residual(i) * t * t * t) {
         ++c.residual;
-        continue;
-      }
-      // Left-right: the right view's own disparity at the match.
-      const int xr = static_cast<int>(std::lround(x - d));
-      if (xr < 0 || xr >= w_ || !std::isfinite(sr[xr]) || std::abs(sr[xr] - d) > s_.lr_tolerance_px) {
-        ++c.left_right;
         continue;
       }
       od[x] = d;

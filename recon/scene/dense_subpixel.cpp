@@ -17,39 +17,63 @@
 namespace naneye::recon::scene {
 namespace {
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+// GCC's -O2 vectorises only loops whose trip count it knows (its "very cheap" cost model): the box
+// sums and the correlation filter, most of the sub-pixel step's time, ask for its dynamic model
+// (vector body plus a scalar remainder). Plain C++ loops either way.
+#if defined(__GNUC__) && !defined(__clang__)
+#define NANEYE_VECTORISE __attribute__((optimize("vect-cost-model=dynamic")))
+#else
+#define NANEYE_VECTORISE
+#endif
 constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // px; the residual autocorrelation's reach: the window radius (noise correlated by Keys' 4 taps and
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
 
-// Sum over the (2r+1)^2 window (zero outside the image), separable running sums in double.
-void box_sum(const float* in, float* out, float* tmp, double* acc, int w, int h, int r) {
-  std::fill(acc, acc + w, 0.0);
-  for (int y = 0; y < std::min(r, h); ++y)
-    for (int x = 0; x < w; ++x) acc[x] += in[static_cast<std::size_t>(y) * w + x];
+// Sum over the (2r+1)^2 window (zero outside the image): per output row, 2r+1 input rows added into
+// one row (`tmp`, w floats, stays in the first-level cache), then 2r+1 of its columns, in float.
+// Direct sums rather than running ones: nothing drifts along a row, and every inner loop is a plain
+// array add that the compiler vectorises (the running sums' loop-carried dependency did not).
+NANEYE_VECTORISE void box_sum(const float* __restrict in, float* __restrict out, float* __restrict tmp, int w,
+                              int h, int r) {
+  const int inner0 = std::min(r, w), inner1 = std::max(inner0, w - r);
   for (int y = 0; y < h; ++y) {
-    if (y + r < h) {
-      const float* add = in + static_cast<std::size_t>(y + r) * w;
-      for (int x = 0; x < w; ++x) acc[x] += add[x];
+    const int y0 = std::max(0, y - r), y1 = std::min(h - 1, y + r);
+    const float* first = in + static_cast<std::size_t>(y0) * w;
+    for (int x = 0; x < w; ++x) tmp[x] = first[x];
+    for (int yy = y0 + 1; yy <= y1; ++yy) {
+      const float* a = in + static_cast<std::size_t>(yy) * w;
+      for (int x = 0; x < w; ++x) tmp[x] += a[x];
     }
-    if (y - r - 1 >= 0) {
-      const float* sub = in + static_cast<std::size_t>(y - r - 1) * w;
-      for (int x = 0; x < w; ++x) acc[x] -= sub[x];
-    }
-    float* t = tmp + static_cast<std::size_t>(y) * w;
-    for (int x = 0; x < w; ++x) t[x] = static_cast<float>(acc[x]);
-  }
-  for (int y = 0; y < h; ++y) {
-    const float* t = tmp + static_cast<std::size_t>(y) * w;
     float* o = out + static_cast<std::size_t>(y) * w;
-    double s = 0;
-    for (int x = 0; x < std::min(r, w); ++x) s += t[x];
-    for (int x = 0; x < w; ++x) {
-      if (x + r < w) s += t[x + r];
-      if (x - r - 1 >= 0) s -= t[x - r - 1];
-      o[x] = static_cast<float>(s);
-    }
+    auto edge = [&](int x) {
+      float s = 0;
+      for (int k = std::max(0, x - r); k <= std::min(w - 1, x + r); ++k) s += tmp[k];
+      o[x] = s;
+    };
+    for (int x = 0; x < inner0; ++x) edge(x);
+    for (int x = inner0; x < inner1; ++x) o[x] = tmp[x - r];
+    for (int k = 1 - r; k <= r; ++k)
+      for (int x = inner0; x < inner1; ++x) o[x] += tmp[x + k];
+    for (int x = inner1; x < w; ++x) edge(x);
   }
+}
+
+// out += rho * z, rho over lags [-kLag, kLag]^2 (row-major), z zero outside the image: one lag at a
+// time over whole rows.
+NANEYE_VECTORISE void filter_lags(const float* __restrict z, float* __restrict out, const float* rho, int w,
+                                  int h) {
+  constexpr int kSide = 2 * kLag + 1;
+  for (int dy = -kLag; dy <= kLag; ++dy)
+    for (int dx = -kLag; dx <= kLag; ++dx) {
+      const float r = rho[(dy + kLag) * kSide + dx + kLag];
+      const int x0 = std::max(0, -dx), x1 = std::min(w, w - dx);
+      for (int y = std::max(0, -dy); y < std::min(h, h - dy); ++y) {
+        float* __restrict o = out + static_cast<std::size_t>(y) * w;
+        const float* __restrict src = z + static_cast<std::size_t>(y + dy) * w + dx;
+        for (int x = x0; x < x1; ++x) o[x] += r * src[x];
+      }
+    }
 }
 
 // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
@@ -106,7 +130,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
     }
   }
   for (int k = 0; k < kChannels; ++k)
-    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), w_, h_, s_.radius);
 }
 
 void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
@@ -126,7 +150,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
   }
   mean_ = count > 0 ? sum / static_cast<double>(count) : 0.0;
   for (int y = 0; y < h_; ++y) {
-    const float* sg = sgbm_.ptr<float>(y);
+    const float* sg = integer_.ptr<float>(y);
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
     for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNan;
   }
@@ -178,8 +202,8 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       break;
     }
     for (std::size_t i = 0; i < n; ++i) mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f;
-    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), acc_.data(), w_, h_, s_.radius);
-    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), w_, h_, s_.radius);
+    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), w_, h_, s_.radius);
     for (std::size_t i = 0; i < n; ++i) {
       if (!std::isfinite(d_[i])) continue;
       const float cnt = S[5 * n + i];
@@ -233,29 +257,18 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   float* zh = chan_.data() + 7 * n;
   for (std::size_t i = 0; i < n; ++i)
     z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f;
-  for (int y = 0; y < h_; ++y)
-    for (int x = 0; x < w_; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
-      zz[i] = z[i] * z[i];
-      zh[i] = 0;
-      if (z[i] == 0) continue;  // no data: adds nothing to either window sum
-      double s = 0;
-      for (int dy = -kLag; dy <= kLag; ++dy) {
-        const int yy = y + dy;
-        if (yy < 0 || yy >= h_) continue;
-        for (int dx = -kLag; dx <= kLag; ++dx) {
-          const int xx = x + dx;
-          if (xx < 0 || xx >= w_) continue;
-          s += rho_[static_cast<std::size_t>((dy + kLag) * kSide + dx + kLag)] *
-               z[static_cast<std::size_t>(yy) * w_ + xx];
-        }
-      }
-      zh[i] = static_cast<float>(z[i] * s);
-    }
+  // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
+  // over whole rows: plain multiply-adds the compiler vectorises.
+  for (std::size_t i = 0; i < n; ++i) {
+    zz[i] = z[i] * z[i];
+    zh[i] = 0;
+  }
+  filter_lags(z, zh, rho_.data(), w_, h_);
+  for (std::size_t i = 0; i < n; ++i) zh[i] *= z[i];
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
-  box_sum(zz, szz, scratch_.data(), acc_.data(), w_, h_, s_.radius);
-  box_sum(zh, szh, scratch_.data(), acc_.data(), w_, h_, s_.radius);
+  box_sum(zz, szz, scratch_.data(), w_, h_, s_.radius);
+  box_sum(zh, szh, scratch_.data(), w_, h_, s_.radius);
   for (std::size_t i = 0; i < n; ++i) kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f;
   std::size_t k = 0;
   for (std::size_t i = 0; i < n; ++i)

@@ -1,10 +1,15 @@
-// Calibration files: OpenCV stereo_calib keys, split or whole, sigmas, and refusals that name the
-// file, the key and the problem.
+// Calibration files: OpenCV stereo_calib keys, split or whole, sigmas, what OpenCV's FileStorage
+// writes (read with yaml-cpp), and refusals that name the file, the key and the problem.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <string>
+#include <vector>
 
 #include "naneye/recon/camera/calibration_io.hpp"
 
@@ -163,4 +168,85 @@ TEST_F(CalibFiles, UnreadableFilesRefused) {
   const auto garbage = write("garbage.yaml", "this: [is: not, {valid\n");
   EXPECT_THROW(load_rig(garbage), CalibrationError);
   expect_refused(variant("0.579, 0., 0.758", "-0.579, 0., 0.758"), {"'M1_sigma'", "negative"});
+}
+
+TEST_F(CalibFiles, WhatOpenCvsFileStorageWritesIsRead) {
+  // Every element type a FileStorage matrix has, its strings and sequences (skipped), and its
+  // spelling of a NaN (.Nan), which must be refused as such rather than misread.
+  const auto rig = load_rig(kDefault);
+  const fs::path out = dir_ / "opencv.yaml";
+  {
+    cv::FileStorage f(out.string(), cv::FileStorage::WRITE);
+    f << "calibration_time"
+      << "Wed Dec  2 12:00:00 2026"
+      << "views" << std::vector<int>{1, 2, 3};
+    f << "image_width" << 250 << "image_height" << 250;
+    cv::Mat m1, m2, d1, d2, r, t;
+    cv::eigen2cv(rig.left.K(), m1);
+    cv::eigen2cv(rig.right.K(), m2);
+    cv::eigen2cv(Eigen::MatrixXd(rig.left.distortion().opencv_order()), d1);
+    cv::eigen2cv(Eigen::MatrixXd(rig.right.distortion().opencv_order()), d2);
+    cv::eigen2cv(rig.R, r);
+    cv::eigen2cv(rig.T, t);
+    m1.convertTo(m1, CV_32F);
+    f << "M1" << m1 << "M2" << m2 << "D1" << d1 << "D2" << d2 << "R" << r << "T" << t;
+    const cv::Mat board = (cv::Mat_<int>(1, 2) << 6, 8);
+    const cv::Mat mask = (cv::Mat_<uchar>(1, 2) << 0, 255);
+    f << "board" << board << "mask" << mask;
+  }
+  const auto back = load_rig(out);
+  EXPECT_EQ(back.left.fx(), static_cast<double>(static_cast<float>(rig.left.fx())));
+  EXPECT_EQ(back.right.K(), rig.right.K());
+  EXPECT_EQ(back.T, rig.T);
+
+  cv::FileStorage f((dir_ / "nan.yaml").string(), cv::FileStorage::WRITE);
+  const cv::Mat nan_t = (cv::Mat_<double>(3, 1) << std::nan(""), 0, 0);
+  f << "T" << nan_t;
+  f.release();
+  std::ifstream in(dir_ / "nan.yaml");
+  const std::string nan_text(std::istreambuf_iterator<char>(in), {});
+  ASSERT_NE(nan_text.find(".Nan"), std::string::npos) << nan_text;
+  const auto nan_file = write("with-nan.yaml", text_.substr(0, text_.find("T: !!opencv-matrix")) +
+                                                   nan_text.substr(nan_text.find("T: !!opencv-matrix")));
+  expect_refused(nan_file, {"with-nan.yaml", "'T'", "non-finite"});
+}
+
+TEST_F(CalibFiles, TheFileMustBeFileStorageYaml) {
+  expect_refused(variant("%YAML:1.0\n", ""), {"variant.yaml", "%YAML:1.0"});
+  expect_refused(write("json.yaml", "{\"M1\": {\"rows\": 1}}\n"), {"json.yaml", "%YAML:1.0"});
+  expect_refused(write("empty.yaml", "%YAML:1.0\n---\n"), {"empty.yaml", "no keys"});
+  expect_refused(write("two.yaml", text_ + "---\nimage_width: 250\n"), {"two.yaml", "2 YAML documents"});
+  expect_refused(write("nul.yaml", text_ + std::string(1, '\0')), {"nul.yaml", "NUL"});
+  // yaml-cpp's own refusal, with the file's line number (the header line counts).
+  expect_refused(write("broken.yaml", "%YAML:1.0\n---\nM1: [1, 2\n"),
+                 {"broken.yaml", "line 4", "not valid YAML"});
+  // The file on which OpenCV 4.6's FileStorage::open looped forever (fuzz_calib_yaml).
+  expect_refused(fs::path(NANEYE_SOURCE_DIR) / "tests/fuzz/corpus/calib_yaml/hang_filestorage_loop.yaml",
+                 {"hang_filestorage_loop.yaml", "not valid YAML"});
+}
+
+TEST_F(CalibFiles, AMatrixNeedsRowsColsASingleChannelTypeAndNumbers) {
+  expect_refused(variant("   dt: d\n   data: [ -0.369", "   data: [ -0.369"), {"'D1'", "no 'dt'", "line 15"});
+  expect_refused(variant("   dt: d\n   data: [ -0.369", "   dt: 3d\n   data: [ -0.369"),
+                 {"'D1'", "'3d'", "single-channel"});
+  expect_refused(variant("data: [ -0.369, 0.303", "data: [ -0.369, \"0.303\""),
+                 {"'D1'", "data value 2", "not a number"});
+  expect_refused(variant("data: [ -0.369, 0.303", "data: [ -0.369, 0x1f"),
+                 {"'D1'", "data value 2", "'0x1f'"});
+  expect_refused(variant("   dt: d\n   data: [ -0.369", "   dt: i\n   data: [ -0.369"),
+                 {"'D1'", "not an integer", "dt 'i'"});
+  expect_refused(variant("   rows: 1\n   cols: 5", "   rows: 1\n   rows: 1\n   cols: 5"),
+                 {"'D1'", "'rows' given twice"});
+  expect_refused(variant("   rows: 1\n   cols: 5", "   rows: -1\n   cols: 5"),
+                 {"'D1'", "'rows'", "positive integer"});
+  expect_refused(variant("D1: !!opencv-matrix", "D1: !!opencv-nd-matrix"), {"'D1'", "not an opencv-matrix"});
+}
+
+TEST_F(CalibFiles, AKeyWeNeedThatIsNotANumberIsNamedAsSuch) {
+  expect_refused(variant("image_width: 250", "image_width: \"250\""),
+                 {"variant.yaml", "'image_width'", "a string ('250')", "not a number"});
+  expect_refused(variant("image_width: 250", "image_width: [ 250 ]"), {"'image_width'", "a sequence"});
+  // Numbers as FileStorage and people write them: a sign, an exponent, a trailing point.
+  const auto rig = load_rig(variant("216.360, 0., 122.414", "+2.1636e+02, 0, 122.414"));
+  EXPECT_DOUBLE_EQ(rig.left.fx(), 216.36);
 }

@@ -18,15 +18,21 @@ namespace naneye::recon {
 namespace {
 
 const char* const kDir = "/usr/share/doc/opencv-doc/examples/data";
-constexpr int kFoundAtLeast = 16;
+constexpr int kFoundAtLeast = 25;
 
-// OpenCV's own calibration of the left camera (left_intrinsics.yml): fx 535.9 px. Used for both
-// eyes: the detector needs the lens only to straighten edges and to test that the grid is a plane.
-CameraModel sample_camera() {
-  cv::FileStorage fs(std::string(kDir) + "/left_intrinsics.yml", cv::FileStorage::READ);
-  cv::Mat K, D;
-  fs["camera_matrix"] >> K;
-  fs["distortion_coefficients"] >> D;
+// OpenCV's own calibration of one eye (calibrateCamera, as left_intrinsics.yml was made: aspect ratio
+// fixed) from its findChessboardCorners + cornerSubPix corners, made in the same run. The detector
+// needs the lens only to straighten edges and to test that the grid is a plane; the set ships the
+// left camera's calibration alone, and the right lens differs enough that its grids fail the plane
+// test (0.5 px) with the left's.
+CameraModel opencv_camera(const std::vector<std::vector<cv::Point2f>>& corners, double& rms) {
+  std::vector<std::vector<cv::Point3f>> object(corners.size());
+  for (auto& o : object)
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 9; ++c) o.emplace_back(static_cast<float>(c), static_cast<float>(r), 0.0f);
+  cv::Mat K = cv::Mat::eye(3, 3, CV_64F), D;
+  std::vector<cv::Mat> rv, tv;
+  rms = cv::calibrateCamera(object, corners, cv::Size(640, 480), K, D, rv, tv, cv::CALIB_FIX_ASPECT_RATIO);
   Eigen::Matrix3d k;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) k(r, c) = K.at<double>(r, c);
@@ -48,28 +54,47 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   if (!std::filesystem::exists(std::string(kDir) + "/left01.jpg")) {
     GTEST_SKIP() << "opencv-doc is not installed (scripts/install-deps.sh installs it)";
   }
-  const CameraModel cam = sample_camera();
+  // OpenCV's corners of every image first: they calibrate each eye for the detector.
+  struct Image {
+    std::string name;
+    cv::Mat gray;
+    std::vector<cv::Point2f> ref;
+  };
+  std::vector<Image> eyes[2];
+  std::vector<std::vector<cv::Point2f>> refs[2];
+  for (int k = 1; k <= 14; ++k) {
+    for (int e = 0; e < 2; ++e) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%s/%s%02d.jpg", kDir, e == 0 ? "left" : "right", k);
+      if (!std::filesystem::exists(name)) continue;  // the set has no pair 10
+      Image im{name, cv::imread(name, cv::IMREAD_GRAYSCALE), {}};
+      ASSERT_TRUE(cv::findChessboardCorners(im.gray, cv::Size(9, 6), im.ref,
+                                            cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE))
+          << name;
+      cv::cornerSubPix(im.gray, im.ref, cv::Size(11, 11), cv::Size(-1, -1),
+                       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01));
+      refs[e].push_back(im.ref);
+      eyes[e].push_back(std::move(im));
+    }
+  }
   CornerSettings s;
   s.board.rows = 6;
   s.board.cols = 9;
-  CornerDetector det(cam, s);
   int images = 0, found = 0;
   double worst = 0, sum2 = 0;
   int n = 0, poor = 0;
   double poor_worst = 0;
-  for (int k = 1; k <= 14; ++k) {
-    for (const char* side : {"left", "right"}) {
-      char name[64];
-      std::snprintf(name, sizeof name, "%s/%s%02d.jpg", kDir, side, k);
-      const cv::Mat gray = cv::imread(name, cv::IMREAD_GRAYSCALE);
-      if (gray.empty()) continue;  // the set has no pair 10
+  for (int e = 0; e < 2; ++e) {
+    double cal_rms = 0;
+    const CameraModel cam = opencv_camera(refs[e], cal_rms);
+    std::printf("OpenCV's calibration of the %s eye: fx %.2f px, RMS %.3f px\n", e == 0 ? "left" : "right",
+                cam.fx(), cal_rms);
+    CornerDetector det(cam, s);
+    for (const Image& im : eyes[e]) {
       ++images;
-      std::vector<cv::Point2f> ref;
-      ASSERT_TRUE(cv::findChessboardCorners(gray, cv::Size(9, 6), ref,
-                                            cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE))
-          << name;
-      cv::cornerSubPix(gray, ref, cv::Size(11, 11), cv::Size(-1, -1),
-                       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01));
+      const cv::Mat& gray = im.gray;
+      const char* name = im.name.c_str();
+      const std::vector<cv::Point2f>& ref = im.ref;
       const std::vector<std::uint16_t> dn = to_dn(gray);
       const RawImageView v{dn.data(), gray.cols, gray.rows, gray.cols, PixelLayout::mono, 0, 0};
       CornerResult res;
@@ -101,7 +126,7 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
       found, images, n, n ? std::sqrt(sum2 / n) : 0.0, worst, poor, poor_worst);
   EXPECT_EQ(images, 26);
   // The target is every image (26); this is what the detector finds today (docs/corners.md,
-  // "Real photographs": the misses are no_grid), kept as a floor so that it can only improve.
+  // "Real photographs": right08 is refused as possibly a larger board), kept as a floor.
   EXPECT_GE(found, kFoundAtLeast);
 }
 

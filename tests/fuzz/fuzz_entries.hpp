@@ -14,7 +14,7 @@ using Entry = int (*)(const std::uint8_t* data, std::size_t size);
 int parse_stream(const std::uint8_t* data, std::size_t size);
 // data: a whole .neyd file; its chunks go through the parser (4 x 4 sensor records).
 int read_neyd(const std::uint8_t* data, std::size_t size);
-// data: a calibration file (OpenCV FileStorage YAML), read by recon::load_rig.
+// data: a calibration file (the YAML OpenCV's FileStorage writes), read by recon::load_rig (yaml-cpp).
 int load_calibration(const std::uint8_t* data, std::size_t size);
 // data: naneyed's TOML configuration (daemon::parse_settings).
 int parse_daemon_toml(const std::uint8_t* data, std::size_t size);

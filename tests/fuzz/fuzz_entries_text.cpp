@@ -29,8 +29,8 @@ std::string text_of(const std::uint8_t* data, std::size_t size) {
   return std::string(reinterpret_cast<const char*>(data), size);
 }
 
-// load_rig reads files by name (OpenCV's FileStorage): one memory-backed file, rewritten for each
-// input, keeps the disk out of the loop.
+// load_rig reads files by name: one memory-backed file, rewritten for each input, keeps the disk out
+// of the loop.
 const std::string& memory_file(const std::uint8_t* data, std::size_t size) {
   static const int fd = memfd_create("naneye-fuzz-calib", 0);
   static const std::string path = "/proc/self/fd/" + std::to_string(fd);

@@ -46,10 +46,6 @@ struct CoarseGridSettings {
   // amplitude of ~3.8 sigma (the square wave's second harmonic, 4 / pi of half the contrast).
   float min_ring_snr = 2.0f;
   int max_candidates = 256;
-  // A lattice cell whose ring symmetry is below this is no X-junction (an L- or T-junction of the
-  // border squares against the margin has first and second harmonics alike: symmetry ~1): the
-  // pattern never includes one, and a grown component may extend beyond the pattern by such cells.
-  float max_outer_symmetry = 2.0f;
   // Lattice: a predicted neighbour is accepted within this share of the local step.
   float lattice_tolerance = 0.3f;
   int max_seeds = 12;
@@ -61,7 +57,6 @@ struct SaddleCandidate {
   Eigen::Vector2f und{0, 0};  // undistorted, normalized * fx (pixel-sized units)
   std::complex<float> phase;  // second angular harmonic: its sign flips between grid neighbours
   float response = 0;         // -det(Hessian) at the maximum
-  float symmetry = 0;         // ring test: second over first angular harmonic (an X-junction >> 1)
   bool usable = false;        // inside the camera model's domain
 };
 
@@ -119,6 +114,7 @@ class CoarseGridFinder {
   float peak_ = 0;                     // the strongest response of the last saddle_map
   int stamp_ = 0;                      // id of the current growth, marks its candidates in cell_of_
   const NoiseModel* noise_ = nullptr;  // of the current find()
+  const LumaView* img_ = nullptr;      // of the current find()
 };
 
 }  // namespace naneye::recon

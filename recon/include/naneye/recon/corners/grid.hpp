@@ -18,5 +18,10 @@ bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<uns
 // +1 / -1: which diagonal pair of quadrants around corner (row, col) is the brighter one, sampled
 // from the image along the grid directions; 0 when unclear. A true checkerboard alternates.
 int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col);
+// The same test at a point p with grid steps dc (to the next column) and dr (to the next row), raw
+// pixels: what the coarse lattice uses to tell X-junctions from the border squares' L- and
+// T-junctions before any fit.
+int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& dc,
+                      const Eigen::Vector2d& dr);
 
 }  // namespace naneye::recon

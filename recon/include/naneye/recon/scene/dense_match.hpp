@@ -14,8 +14,8 @@
 //      itself (interpolation and a Bayer filter make neighbouring pixels' noise correlated);
 //   4. validity: refinement converged near the integer stage; sigma small enough that the integer
 //      stage's half-pixel basin holds at 3 sigma; the residual consistent with the pair's noise
-//      (a chi-square test against the median window); a left-right check (the right image's
-//      disparities from a second SGM run on the mirrored pair must agree); not occluded (no nearer
+//      (a chi-square test against the median window); a left-right check (SGBM's own: the right
+//      view's disparities from the same aggregated cost must agree); not occluded (no nearer
 //      surface claims the same right pixel); every tap inside both eyes' valid masks.
 #include <array>
 #include <memory>
@@ -58,7 +58,7 @@ struct MatchCounts {
   int texture = 0;     // sigma above max_sigma_px
   int converged = 0;   // the reference field still moving by more than sigma
   int residual = 0;    // residual above the pair's noise (chi-square)
-  int left_right = 0;  // the right view's disparity disagrees
+  int left_right = 0;  // SGBM's left-right check refused it (counted before the tests below)
   int occluded = 0;    // a nearer surface claims the same right pixel
   int valid = 0;
 };
@@ -74,7 +74,7 @@ class RectifiedMatcher {
   const cv::Mat& disparity() const { return disp_; }
   const cv::Mat& sigma() const { return sigma_; }
   // SGBM's own result (its 1/16 px parabola; NaN where it gave none), for comparisons.
-  const cv::Mat& integer_stage() const { return sgbm_; }
+  const cv::Mat& integer_stage() const { return integer_; }
   const MatchCounts& counts() const { return counts_; }
   double residual_sigma() const { return residual_sigma_; }  // median window's, input units
   double noise_correlation() const { return kappa_; }        // median correlation factor
@@ -106,8 +106,8 @@ class RectifiedMatcher {
 
   MatcherSettings s_;
   int w_, h_;
-  cv::Ptr<cv::StereoSGBM> sgbm_l_, sgbm_r_;
-  cv::Mat l8_, r8_, l8f_, r8f_, d16_, d16r_, sgbm_, sgbm_right_;
+  cv::Ptr<cv::StereoSGBM> sgbm_;
+  cv::Mat l8_, r8_, d16_, integer_;
   cv::Mat disp_, sigma_;
   // Per pixel: the Gauss-Newton state (disparity, gain, offset, last step times gain, residual
   // variance, noise correlation factor, window count, (A^-1)_cc) and the window sums
@@ -116,7 +116,6 @@ class RectifiedMatcher {
   MatchCounts counts_;
   std::vector<float> chan_, sums_, line_;
   std::vector<float> scratch_, line_copy_;
-  std::vector<double> acc_;
   double mean_ = 0;
   std::vector<float> rho_;  // the residual's autocorrelation over lags [-3, 3]^2
   double residual_sigma_ = 0, kappa_ = 1;

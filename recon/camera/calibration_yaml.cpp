@@ -1,0 +1,210 @@
+#include "calibration_yaml.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <string_view>
+
+#include "naneye/recon/camera/calibration_io.hpp"
+
+namespace naneye::recon::detail {
+namespace {
+
+// A calibration is a few kB (config/calib/paper-d3.yaml: 2.3 kB, with sigmas and comments); 1 MiB
+// is far beyond any, and bounds the text, and so the nodes, that yaml-cpp builds for a file that is
+// something else.
+constexpr std::size_t kMaxFileBytes = std::size_t{1} << 20;
+
+// yaml-cpp's tag for `!!opencv-matrix`, the only tagged value FileStorage writes for a cv::Mat.
+constexpr std::string_view kMatrixTag = "tag:yaml.org,2002:opencv-matrix";
+
+// OpenCV's single-channel element types, as FileStorage names them in `dt` (CV_8U ... CV_16F).
+constexpr std::string_view kDepthChars = "ucwsifdh";
+
+[[noreturn]] void fail_file(const std::string& file, const std::string& problem) {
+  throw CalibrationError(file + ": " + problem);
+}
+
+[[noreturn]] void fail_key(const std::string& file, const std::string& key, const YAML::Node& at,
+                           const std::string& problem) {
+  const int line = at.Mark().line;  // -1 when yaml-cpp has no position
+  throw CalibrationError(file + ": key '" + key + "': " + problem +
+                         (line >= 0 ? " (line " + std::to_string(line + 1) + ")" : ""));
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return std::tolower(c); });
+  return out;
+}
+
+// A plain (unquoted) scalar as FileStorage writes a number: decimal, `0.`, exponents, and its
+// `.Nan`, `.Inf`, `-.Inf`. Locale-independent (std::from_chars), the whole text or nothing.
+std::optional<double> number(const YAML::Node& n) {
+  if (!n.IsScalar() || n.Tag() != "?") return std::nullopt;  // "!" marks a quoted scalar: a string
+  std::string_view s = n.Scalar();
+  const std::string l = lower(s);
+  if (l == ".nan") return std::numeric_limits<double>::quiet_NaN();
+  if (l == ".inf" || l == "+.inf") return std::numeric_limits<double>::infinity();
+  if (l == "-.inf") return -std::numeric_limits<double>::infinity();
+  if (s.size() > 1 && s[0] == '+' && s[1] != '-') s.remove_prefix(1);
+  double v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
+  return v;
+}
+
+// A piece of the file in a message: short, since a message is logged and shown in /v1/status.
+std::string excerpt(const std::string& s) {
+  constexpr std::size_t kMaxChars = 40;  // enough to recognise a value, not a dump of the file
+  return "'" + (s.size() > kMaxChars ? s.substr(0, kMaxChars) + "..." : s) + "'";
+}
+
+// What OpenCV's reader stores for a float matrix's entry; beyond float's range (casting is
+// undefined there) the infinity it rounds to.
+double nearest_float(double v) {
+  if (std::abs(v) > std::numeric_limits<float>::max() && std::isfinite(v))
+    return std::copysign(std::numeric_limits<double>::infinity(), v);
+  return static_cast<double>(static_cast<float>(v));
+}
+
+// The value of `name` in a map, at most once (yaml-cpp keeps a repeated key twice). Not Node's
+// operator[] (it throws on a scalar) nor its assignment (which re-points the node it assigns to).
+std::optional<YAML::Node> member(const std::string& file, const std::string& key, const YAML::Node& map,
+                                 const std::string& name) {
+  std::optional<YAML::Node> found;
+  for (const auto& kv : map) {
+    if (!kv.first.IsScalar() || kv.first.Scalar() != name) continue;
+    if (found) fail_key(file, key, kv.first, "'" + name + "' given twice");
+    found.emplace(kv.second);
+  }
+  return found;
+}
+
+int dimension(const std::string& file, const std::string& key, const YAML::Node& map,
+              const std::string& name) {
+  const auto n = member(file, key, map, name);
+  if (!n) fail_key(file, key, map, "a matrix needs rows, cols, dt and data: no '" + name + "'");
+  const auto v = number(*n);
+  if (!v || *v != std::floor(*v) || *v < 1 || *v > static_cast<double>(std::numeric_limits<int>::max()))
+    fail_key(file, key, *n, "'" + name + "' must be a positive integer, not " + excerpt(n->Scalar()));
+  return static_cast<int>(*v);
+}
+
+// An `!!opencv-matrix`: what cv::read(FileNode, Mat) reads, single-channel (every matrix of a rig).
+cv::Mat matrix(const std::string& file, const std::string& key, const YAML::Node& map) {
+  if (map.Tag() != "?" && map.Tag() != kMatrixTag)
+    fail_key(file, key, map, "a map tagged " + excerpt(map.Tag()) + ": not an opencv-matrix");
+  const int rows = dimension(file, key, map, "rows");
+  const int cols = dimension(file, key, map, "cols");
+  const auto dt = member(file, key, map, "dt");
+  if (!dt) fail_key(file, key, map, "a matrix needs rows, cols, dt and data: no 'dt'");
+  const std::string type = dt->IsScalar() ? dt->Scalar() : "";
+  if (type.size() != 1 || kDepthChars.find(type[0]) == std::string_view::npos)
+    fail_key(file, key, *dt,
+             "dt " + excerpt(type) + " is not a single-channel OpenCV type (one of u c w s i f d h)");
+  const bool integral = std::string_view("ucwsi").find(type[0]) != std::string_view::npos;
+  const bool single = type[0] == 'f';
+  const auto data_node = member(file, key, map, "data");
+  if (!data_node || !data_node->IsSequence()) fail_key(file, key, map, "data is not a sequence of numbers");
+  const YAML::Node& data = *data_node;
+  const std::size_t given = data.size();
+  if (given != static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols))
+    fail_key(file, key, data,
+             "data has " + std::to_string(given) + " values but rows x cols is " + std::to_string(rows) +
+                 "x" + std::to_string(cols));
+  cv::Mat m(rows, cols, CV_64F);
+  std::size_t i = 0;
+  for (const auto& e : data) {
+    const auto v = number(e);
+    if (!v)
+      fail_key(file, key, e,
+               "data value " + std::to_string(i + 1) + " (" + excerpt(e.Scalar()) + ") is not a number");
+    if (integral && std::isfinite(*v) && *v != std::floor(*v))
+      fail_key(file, key, e,
+               "data value " + std::to_string(i + 1) + " is not an integer, as dt '" + type + "' says");
+    // A float matrix holds what OpenCV's reader makes of the text: the nearest float (FileStorage
+    // writes 9 significant digits, which name one float but not its double).
+    m.at<double>(static_cast<int>(i / cols), static_cast<int>(i % cols)) = single ? nearest_float(*v) : *v;
+    ++i;
+  }
+  return m;
+}
+
+std::string read_text(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail_file(file, "file not found");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail_file(file, "cannot be opened");
+  std::string text;
+  std::array<char, 16384> chunk;  // read as it comes: a pipe has no size to ask for
+  while (in) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxFileBytes) fail_file(file, "larger than 1 MiB: not a calibration");
+  }
+  if (in.bad()) fail_file(file, "cannot be read");
+  // No text file holds a NUL; it ended OpenCV's reader in a loop (hang_nul_byte.yaml), and a
+  // calibration read by another program should not depend on what each makes of one.
+  if (text.find('\0') != std::string::npos) fail_file(file, "holds a NUL byte: not a YAML text file");
+  return text;
+}
+
+}  // namespace
+
+std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::string text = read_text(path);
+  // FileStorage writes `%YAML:1.0` first and reads a file as YAML only when it begins with `%YAML`
+  // (version 1.x); yaml-cpp wants `%YAML 1.x`. The line is checked, then blanked, so that
+  // yaml-cpp's line numbers are still the file's.
+  const std::size_t eol = std::min(text.find('\n'), text.size());
+  const std::string_view first(text.data(), eol);
+  if (!first.starts_with("%YAML:1.") && !first.starts_with("%YAML 1."))
+    fail_file(
+        file,
+        "not an OpenCV FileStorage YAML file: the first line must be %YAML:1.0, as FileStorage writes it");
+  text.erase(0, eol);
+
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(text);
+  } catch (const YAML::Exception& e) {
+    fail_file(file, (e.mark.line >= 0 ? "line " + std::to_string(e.mark.line + 1) + ": " : std::string()) +
+                        "not valid YAML: " + e.msg);
+  }
+  if (docs.empty() || docs[0].IsNull()) fail_file(file, "holds no keys");
+  if (docs.size() > 1)
+    fail_file(file, "holds " + std::to_string(docs.size()) + " YAML documents; a calibration is one");
+  const YAML::Node& root = docs[0];
+  if (!root.IsMap()) fail_file(file, "not a map of keys (the top level of a FileStorage file)");
+
+  std::vector<YamlKey> keys;
+  for (const auto& kv : root) {
+    if (!kv.first.IsScalar() || kv.first.Scalar().empty())
+      fail_file(file, "line " + std::to_string(kv.first.Mark().line + 1) + ": a key that is not a name");
+    YamlKey k{kv.first.Scalar(), {}, {}};
+    const YAML::Node& v = kv.second;
+    if (v.IsMap() && member(file, k.key, v, "data")) {
+      k.value = matrix(file, k.key, v);
+    } else if (const auto x = number(v)) {
+      k.value = cv::Mat(1, 1, CV_64F, cv::Scalar(*x));
+    } else {
+      k.skipped = v.IsMap()        ? "a map without data"
+                  : v.IsSequence() ? "a sequence"
+                  : v.IsNull()     ? "empty"
+                                   : "a string (" + excerpt(v.Scalar()) + ")";
+    }
+    keys.push_back(std::move(k));
+  }
+  return keys;
+}
+
+}  // namespace naneye::recon::detail
