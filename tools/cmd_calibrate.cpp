@@ -12,9 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "calibrate_images.hpp"
 #include "calibrate_views.hpp"
 #include "cli_inputs.hpp"
 #include "commands.hpp"
+#include "image_pairs.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
 
@@ -23,6 +25,8 @@ namespace {
 
 struct CalibrateOptions {
   std::vector<std::string> inputs;
+  std::vector<std::string> left, right;  // image files or glob patterns, instead of --input
+  std::string color = "mono";
   // Defaults: the paper's board, as recon::BoardGeometry states it.
   std::string pattern = pattern_text(recon::BoardGeometry{});
   double square_mm = recon::BoardGeometry{}.square_mm;
@@ -75,12 +79,44 @@ void run_calibrate(const CalibrateOptions& o) {
   const recon::BoardGeometry board = parse_board(o.pattern, o.square_mm);
   recon::CornerSettings corners;
   corners.board = board;
+  if (o.inputs.empty() == o.left.empty())
+    throw std::invalid_argument("give --input URI, or --left and --right image files (not both)");
+  if (o.color != "mono" && o.color != "grbg") throw std::invalid_argument("--color: mono or grbg");
+  const driver::ColorMode color = o.color == "grbg" ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
   std::vector<std::filesystem::path> guess_files(o.guess.begin(), o.guess.end());
-  if (guess_files.empty()) guess_files.push_back(sim::find_calibration("paper-d3.yaml"));
-  const recon::StereoRig guess = recon::load_rig(guess_files);
+  std::vector<std::pair<std::string, std::string>> pairs;
+  recon::StereoRig guess;
+  if (!o.left.empty()) {
+    pairs = image_pairs(o.left, o.right);
+    driver::Image10 first;
+    driver::read_image(pairs.front().first, driver::ImageSettings{color}, first);
+    guess = guess_files.empty() ? pinhole_rig(first.width, first.height) : recon::load_rig(guess_files);
+  } else {
+    if (guess_files.empty()) guess_files.push_back(sim::find_calibration("paper-d3.yaml"));
+    guess = recon::load_rig(guess_files);
+  }
 
   Progress progress;
-  CollectedViews views = collect_views(o.inputs, guess, corners, o.max_pairs, progress);
+  CollectedViews views;
+  recon::StereoRig lens;  // images without --guess: the first round's calibration (calibrate_images.cpp)
+  if (!pairs.empty() && guess_files.empty()) {
+    const CollectedViews first = collect_image_views(pairs, guess, corners, false, color, progress);
+    recon::CalibrationSettings s0;
+    s0.fix_k3 = o.fix_k3;
+    s0.tangential = o.tangential;
+    s0.image_width = guess.left.width();
+    s0.image_height = guess.left.height();
+    const recon::CalibrationResult r0 = recon::calibrate_stereo(first.views, board, s0);
+    if (!r0.ok) throw std::runtime_error("calibration for the lens model failed: " + r0.message);
+    progress.done("lens modelled from " + std::to_string(first.views.size()) + " views: " + r0.message);
+    lens = r0.rig;
+    views = collect_image_views(pairs, lens, corners, true, color, progress);
+  } else if (!pairs.empty()) {
+    views = collect_image_views(pairs, guess, corners, true, color, progress);
+  } else {
+    views = collect_views(o.inputs, guess, corners, o.max_pairs, progress);
+  }
+  if (!pairs.empty() && guess_files.empty()) guess = lens;
   if (views.views.empty())
     throw std::runtime_error("no board found in " + std::to_string(views.pairs) +
                              " pairs: check --pattern (" + o.pattern + " inner corners) and the inputs");
@@ -123,6 +159,8 @@ void run_calibrate(const CalibrateOptions& o) {
              << (o.tangential ? "free" : "fixed at 0") << "\n# *_sigma: one-sigma marginal uncertainties, "
              << "sigma^2 (J^T J)^-1 at the optimum (docs/calibration.md)\n";
   for (const auto& in : o.inputs) provenance << "# input: " << in << "\n";
+  for (const auto& in : o.left) provenance << "# left: " << in << "\n";
+  for (const auto& in : o.right) provenance << "# right: " << in << "\n";
   write_atomically(res.rig, o.output, provenance.str());
   print_report(res, views, splits.get(), odd_even.get(), settings, {o.json, o.output});
 }
@@ -134,8 +172,12 @@ void add_calibrate_commands(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "calibrate", "Calibrate both cameras and the stereo pose from checkerboard captures (one LM bundle)");
   cmd->add_option("--input", o->inputs,
-                  "Source URI (file://, sim://...), a .raw/.neyd capture, or a folder of them; repeatable")
-      ->required();
+                  "Source URI (file://, sim://...), a .raw/.neyd capture, or a folder of them; repeatable");
+  cmd->add_option("--left", o->left,
+                  "Left image files (PNG, JPEG, PGM, BMP, TIFF) or glob patterns, sorted by name; any size");
+  cmd->add_option("--right", o->right, "Right image files or glob patterns, paired in order with --left");
+  cmd->add_option("--color", o->color, "Image pixels: mono, or grbg (a raw Bayer mosaic)")
+      ->capture_default_str();
   cmd->add_option("--pattern", o->pattern, "Inner corners ROWSxCOLS")->capture_default_str();
   cmd->add_option("--square-mm", o->square_mm, "Square size")
       ->capture_default_str()

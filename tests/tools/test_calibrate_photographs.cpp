@@ -1,0 +1,78 @@
+// `naneye calibrate --left ... --right ...` on real photographs nobody here rendered: OpenCV's sample
+// stereo set (Debian's opencv-doc, 13 pairs of a 9 x 6 inner-corner board of 25 mm squares, a lens
+// nobody gave us). Its left fx must be within 1 % of OpenCV's own calibration of the same images
+// (calibrateCamera on findChessboardCorners + cornerSubPix, made here), its RMS below the 0.39 px of
+// the set's left_intrinsics.yml, every free parameter with a sigma.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "run_cli.hpp"
+
+namespace {
+
+const std::string kDir = "/usr/share/doc/opencv-doc/examples/data";
+
+// OpenCV's calibration of one eye, as a user of OpenCV would make it (default flags).
+double opencv_fx(const char* side, double& rms) {
+  std::vector<std::vector<cv::Point2f>> image;
+  std::vector<std::vector<cv::Point3f>> object;
+  for (int k = 1; k <= 14; ++k) {
+    char name[128];
+    std::snprintf(name, sizeof name, "%s/%s%02d.jpg", kDir.c_str(), side, k);
+    const cv::Mat g = cv::imread(name, cv::IMREAD_GRAYSCALE);
+    if (g.empty()) continue;  // the set has no pair 10
+    std::vector<cv::Point2f> p;
+    if (!cv::findChessboardCorners(g, cv::Size(9, 6), p,
+                                   cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE))
+      continue;
+    cv::cornerSubPix(g, p, cv::Size(11, 11), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01));
+    image.push_back(p);
+    auto& o = object.emplace_back();
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 9; ++c)
+        o.emplace_back(25.0f * static_cast<float>(c), 25.0f * static_cast<float>(r), 0.0f);
+  }
+  cv::Mat K, D;
+  std::vector<cv::Mat> rv, tv;
+  rms = cv::calibrateCamera(object, image, cv::Size(640, 480), K, D, rv, tv);
+  return K.at<double>(0, 0);
+}
+
+TEST(CalibratePhotographs, OpenCvSampleSetLeftFxWithinOnePercentOfOpenCvs) {
+  if (!std::filesystem::exists(kDir + "/left01.jpg"))
+    GTEST_SKIP() << "opencv-doc is not installed (scripts/install-deps.sh installs it)";
+  const std::string out = (std::filesystem::temp_directory_path() / "naneye-photo-calib.yaml").string();
+  const auto r = naneye::test::run_cli("calibrate --left '" + kDir + "/left[0-9]*.jpg' --right '" + kDir +
+                                       "/right[0-9]*.jpg' --pattern 6x9 --square-mm 25 --json -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  double fx = 0;
+  for (const auto& p : j["parameters"]) {
+    if (p["name"] == "left.fx") fx = p["value"].get<double>();
+    if (!p["fixed"].get<bool>()) {
+      EXPECT_GT(p["sigma"].get<double>(), 0.0) << p["name"];
+    }
+  }
+  double cv_rms = 0;
+  const double cv_fx = opencv_fx("left", cv_rms);
+  const double rms = j["rms_px"].get<double>();
+  std::printf(
+      "naneye calibrate: left fx %.2f px, RMS %.4f px, %d pairs; OpenCV calibrateCamera (left): fx %.2f px, "
+      "RMS %.4f px\n",
+      fx, rms, j["pairs"].get<int>(), cv_fx, cv_rms);
+  EXPECT_EQ(j["pairs"].get<int>(), 13);
+  EXPECT_LE(std::abs(fx - cv_fx), 0.01 * cv_fx);
+  EXPECT_LT(rms, 0.39);
+  std::filesystem::remove(out);
+}
+
+}  // namespace
