@@ -5,23 +5,40 @@
 # sequential requests made during the attack), then pairs dropped, RSS before and after, and whether
 # the daemon lived. Target: alive, p99 <= 100 ms, 0 pairs dropped, RSS growth <= 5 MB.
 #
-#   scripts/attack.sh [--port 8080] [--pid PID] [--seconds 5]
+#   scripts/attack.sh [--port 8080] [--pid PID] [--seconds 5] [--tls] [--token-file FILE]
 # --pid enables the RSS figures and the reload storm (the daemon's own pid; SIGHUP only).
+# --tls: every connection, the attackers' and the normal client's, is a TLS session (certificate not
+# verified: a test certificate), so slow and idle clients hold handshaken sessions; --token-file:
+# the normal client presents the daemon's bearer token (the attackers do not).
 # Only 127.0.0.1 is ever contacted.
 set -euo pipefail
 exec python3 - "$@" <<'PY'
-import argparse, json, os, signal, socket, statistics, sys, threading, time
+import argparse, json, os, signal, socket, ssl, statistics, sys, threading, time
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--port", type=int, default=8080)
 ap.add_argument("--pid", type=int)
 ap.add_argument("--seconds", type=float, default=5.0, help="length of each attack (max 60)")
+ap.add_argument("--tls", action="store_true", help="speak TLS to a daemon with http.tls_cert")
+ap.add_argument("--token-file", help="the daemon's http.token_file, for the normal client")
 a = ap.parse_args()
 HOST, SECONDS = "127.0.0.1", min(a.seconds, 60.0)
+AUTH = f"Authorization: Bearer {open(a.token_file).read().strip()}\r\n" if a.token_file else ""
+TLS = None
+if a.tls:
+    TLS = ssl.create_default_context()
+    TLS.check_hostname = False
+    TLS.verify_mode = ssl.CERT_NONE
 
 def connect(timeout=2.0):
     s = socket.create_connection((HOST, a.port), timeout=timeout)
     s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    if TLS:
+        try:
+            s = TLS.wrap_socket(s, server_hostname="localhost")  # the whole handshake, within timeout
+        except (OSError, ssl.SSLError):
+            s.close()
+            raise OSError("TLS handshake failed")
     return s
 
 def get(path, timeout=2.0):
@@ -29,7 +46,7 @@ def get(path, timeout=2.0):
     t0 = time.monotonic()
     try:
         with connect(timeout) as s:
-            s.sendall(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n".encode())
+            s.sendall(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n{AUTH}Connection: close\r\n\r\n".encode())
             data = b""
             while True:
                 chunk = s.recv(65536)
@@ -163,8 +180,8 @@ before = status()
 if before is None:
     sys.exit(f"no naneyed answering on {HOST}:{a.port}")
 rss0 = rss_kb()
-print(f"naneyed {before['version']} on {HOST}:{a.port}, source {before['source']['uri']}, "
-      f"{SECONDS:g} s per attack", flush=True)
+print(f"naneyed {before['version']} on {'https' if TLS else 'http'}://{HOST}:{a.port}, "
+      f"source {before['source']['uri']}, {SECONDS:g} s per attack", flush=True)
 worst = 0.0
 for name, attack in [("baseline", lambda stop: stop.wait()), ("slowloris x500", slowloris),
                      ("idle flood x2000", idle_flood), ("oversize requests", oversize),

@@ -66,6 +66,12 @@ std::string hex(const unsigned char* p, std::size_t n) {
   return s;
 }
 
+std::string new_session_secret() {
+  unsigned char secret[kSessionBytes];
+  if (RAND_bytes(secret, sizeof secret) != 1) throw std::runtime_error("http: no random bytes for sessions");
+  return hex(secret, sizeof secret);
+}
+
 // The value of one form field of an application/x-www-form-urlencoded body ('+' is a space).
 std::string form_field(std::string_view body, std::string_view name) {
   while (!body.empty()) {
@@ -195,18 +201,34 @@ Access::Access(const Settings& s)
     token_digest_ = sha256(read_token(s.http_token_file));
     token_required_ = true;
   }
-  unsigned char secret[kSessionBytes];
-  if (RAND_bytes(secret, sizeof secret) != 1) throw std::runtime_error("http: no random bytes for sessions");
-  session_ = hex(secret, sizeof secret);
+  session_ = new_session_secret();
   session_digest_ = sha256(session_);
 }
 
+std::string Access::reload_token(const std::filesystem::path& file) {
+  if (!token_required_) throw std::runtime_error("http: no token_file at start, none to reload");
+  const Digest next = sha256(read_token(file));
+  // Made before the lock is taken, and before anything changes: it may fail.
+  const std::string session = new_session_secret();
+  std::lock_guard lock(mu_);
+  if (same(next, token_digest_)) return "applied: the same token";
+  token_digest_ = next;
+  session_ = session;
+  session_digest_ = sha256(session_);
+  return "applied: a new token; viewer sessions opened with the old one have ended";
+}
+
 bool Access::token_matches(std::string_view presented) const {
-  return token_required_ && same(sha256(presented), token_digest_);
+  const Digest d = sha256(presented);
+  std::lock_guard lock(mu_);
+  return token_required_ && same(d, token_digest_);
 }
 
 bool Access::session_matches(std::string_view presented) const {
-  return !presented.empty() && same(sha256(presented), session_digest_);
+  if (presented.empty()) return false;
+  const Digest d = sha256(presented);
+  std::lock_guard lock(mu_);
+  return same(d, session_digest_);
 }
 
 bool Access::host_allowed(std::string_view header) const {
@@ -248,10 +270,15 @@ void Access::open_session(const httplib::Request& req, httplib::Response& res) c
     send_error(res, 401, "unauthorized", "wrong or missing token");
     return;
   }
+  std::string session;
+  {
+    std::lock_guard lock(mu_);
+    session = session_;
+  }
   // HttpOnly: no script (an injected one included) reads it; SameSite=Strict: no other site's page
   // makes the browser send it; no Max-Age: it ends with the browser session, and with this daemon's
-  // run (the value is random per start).
-  res.set_header("Set-Cookie", std::string(kCookieName) + "=" + session_ +
+  // run or its token (the value is random per start and per new token).
+  res.set_header("Set-Cookie", std::string(kCookieName) + "=" + session +
                                    "; Path=/; HttpOnly; SameSite=Strict" + (tls_ ? "; Secure" : ""));
   res.set_header("Location", "/");
   res.set_header("Cache-Control", "no-store");

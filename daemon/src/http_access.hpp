@@ -7,7 +7,11 @@
 //    `Authorization: Bearer <token>` or as the session cookie that POST /v1/session hands out for
 //    it (the browser viewer: EventSource and <img> cannot send headers). Tokens are compared as
 //    SHA-256 digests with CRYPTO_memcmp, so the time taken says nothing about the token.
+// The token file is read again on SIGHUP (reload_token); admit() may run on every HTTP thread
+// meanwhile, so the token's digest and the session secret are read and replaced under a mutex.
 #include <array>
+#include <filesystem>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -29,6 +33,12 @@ class Access {
   bool token_required() const { return token_required_; }
   bool loopback_bind() const { return loopback_bind_; }
 
+  // SIGHUP: reads `file` again, with the checks of the start. A refused file (unreadable, too short)
+  // throws std::runtime_error naming it, and the token in use stays. A new token also ends every
+  // session opened with the old one (a new session secret): a token is rotated because it may have
+  // leaked, and so may the cookies it bought. Returns what was applied.
+  std::string reload_token(const std::filesystem::path& file);
+
   // True when the request may be routed; otherwise `res` holds the refusal (403 or 401).
   bool admit(const httplib::Request& req, httplib::Response& res) const;
   // POST /v1/session: the token (form field `token`, or the Authorization header) for the cookie.
@@ -43,9 +53,10 @@ class Access {
   bool loopback_bind_ = true;
   bool tls_ = false;
   int port_ = 0;
-  bool token_required_ = false;
+  bool token_required_ = false;  // fixed at start: a reload changes the token, not whether there is one
+  mutable std::mutex mu_;        // guards the three below
   Digest token_digest_{};
-  std::string session_;  // the cookie's value: random, for this run of the daemon only
+  std::string session_;  // the cookie's value: random, for this run of the daemon (or token) only
   Digest session_digest_{};
 };
 

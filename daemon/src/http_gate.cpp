@@ -41,11 +41,12 @@ void lower_priority(int nice) {
   setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice);
 }
 
-Gate::Gate(const GateLimits& limits, RequestRunner& runner, HttpCounters& counters, const TlsContext* tls)
+Gate::Gate(const GateLimits& limits, RequestRunner& runner, HttpCounters& counters,
+           std::shared_ptr<const TlsContext> tls)
     : limits_(limits),
       runner_(runner),
       counters_(counters),
-      tls_(tls),
+      tls_(std::move(tls)),
       cap_(descriptor_budget(limits.max_connections)) {
   counters_.connection_cap = cap_;
   if (cap_ < limits.max_connections) {
@@ -114,7 +115,12 @@ void Gate::admit(int fd) {
   counters_.connections.fetch_add(1, std::memory_order_relaxed);
   auto c = std::make_unique<Conn>();
   c->fd = fd;
-  c->io = std::make_unique<Transport>(fd, tls_);
+  std::shared_ptr<const TlsContext> tls;
+  {
+    std::lock_guard lock(tls_mu_);
+    tls = tls_;
+  }
+  c->io = std::make_unique<Transport>(fd, std::move(tls));
   if (stop_.load() || open > cap_ + kAdmitSlack) {
     counters_.refused.fetch_add(1, std::memory_order_relaxed);
     return refuse(*c, 503, "too_many_connections", "the server is at its connection limit; retry later");
@@ -128,6 +134,11 @@ void Gate::admit(int fd) {
     incoming_.push_back(std::move(c));
   }
   wake();
+}
+
+void Gate::set_tls(std::shared_ptr<const TlsContext> tls) {
+  std::lock_guard lock(tls_mu_);
+  if (tls_ && tls) tls_ = std::move(tls);
 }
 
 void Gate::worker_loop() {

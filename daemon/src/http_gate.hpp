@@ -93,7 +93,8 @@ class Gate {
   static constexpr int kAdmitSlack = 16;
 
   // `tls` null: plain HTTP; else every connection is a TLS session with that context.
-  Gate(const GateLimits& limits, RequestRunner& runner, HttpCounters& counters, const TlsContext* tls);
+  Gate(const GateLimits& limits, RequestRunner& runner, HttpCounters& counters,
+       std::shared_ptr<const TlsContext> tls);
   ~Gate();
   Gate(const Gate&) = delete;
   Gate& operator=(const Gate&) = delete;
@@ -104,6 +105,9 @@ class Gate {
   void start();
   // Takes ownership of an accepted socket (httplib's accept thread); never blocks.
   void admit(int fd);
+  // From any thread (SIGHUP): the context that connections accepted from now on get; connections
+  // already open keep theirs. A gate without TLS stays without.
+  void set_tls(std::shared_ptr<const TlsContext> tls);
   // Closes every connection (in-flight ones are shut down so that their writes end) and joins.
   void stop();
 
@@ -129,7 +133,8 @@ class Gate {
   GateLimits limits_;
   RequestRunner& runner_;
   HttpCounters& counters_;
-  const TlsContext* tls_;
+  std::mutex tls_mu_;  // guards tls_: the accept thread reads it, a reload replaces it
+  std::shared_ptr<const TlsContext> tls_;
   int cap_;
   int wake_fd_ = -1;  // eventfd: admissions and returns from workers
   std::atomic<bool> stop_{false};

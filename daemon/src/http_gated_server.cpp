@@ -83,8 +83,8 @@ class RequestStream final : public httplib::Stream {
 
 class GatedServer final : public httplib::Server, public RequestRunner {
  public:
-  GatedServer(const GateLimits& limits, HttpCounters& counters, const TlsContext* tls)
-      : gate_(limits, *this, counters, tls) {
+  GatedServer(const GateLimits& limits, HttpCounters& counters, std::shared_ptr<const TlsContext> tls)
+      : gate_(limits, *this, counters, std::move(tls)) {
     new_task_queue = [] { return new InlineQueue; };
   }
   Gate& gate() { return gate_; }
@@ -110,8 +110,8 @@ class GatedServer final : public httplib::Server, public RequestRunner {
 };
 
 std::unique_ptr<httplib::Server> make_gated_server(const GateLimits& limits, HttpCounters& counters,
-                                                   const TlsContext* tls, Gate*& gate) {
-  auto server = std::make_unique<GatedServer>(limits, counters, tls);
+                                                   std::shared_ptr<const TlsContext> tls, Gate*& gate) {
+  auto server = std::make_unique<GatedServer>(limits, counters, std::move(tls));
   gate = &server->gate();
   return server;
 }

@@ -9,8 +9,8 @@
 namespace naneye::daemon::http {
 
 // `gate` is set to the server's gate (owned by the server; start() it before listening). `tls` null:
-// plain HTTP; else it must outlive the server.
+// plain HTTP.
 std::unique_ptr<httplib::Server> make_gated_server(const GateLimits& limits, HttpCounters& counters,
-                                                   const TlsContext* tls, Gate*& gate);
+                                                   std::shared_ptr<const TlsContext> tls, Gate*& gate);
 
 }  // namespace naneye::daemon::http

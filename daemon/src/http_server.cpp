@@ -195,12 +195,13 @@ HttpServer::HttpServer(const Settings& settings, Pipeline& pipeline, std::string
   // rate). An idle connection costs no thread (it waits in the gate), so 100 only bounds how long
   // one connection keeps its place.
   limits.keep_alive_max = 100;
+  std::shared_ptr<const http::TlsContext> tls;  // null: plain HTTP; the gate keeps it
   if (!settings.http_tls_cert.empty())
-    tls_ =
-        std::make_unique<http::TlsContext>(settings.http_tls_cert.string(), settings.http_tls_key.string());
+    tls = std::make_shared<const http::TlsContext>(settings.http_tls_cert.string(),
+                                                   settings.http_tls_key.string());
   access_ = std::make_unique<http::Access>(settings);
   http::warn_about_access(settings, *access_);
-  server_ = http::make_gated_server(limits, ctx_->connections, tls_.get(), gate_);
+  server_ = http::make_gated_server(limits, ctx_->connections, std::move(tls), gate_);
   // Only for the Keep-Alive header httplib writes: the gate enforces both.
   server_->set_keep_alive_timeout(std::max<time_t>(1, settings.http_idle_timeout_ms / 1000));
   server_->set_keep_alive_max_count(static_cast<std::size_t>(limits.keep_alive_max));
@@ -292,6 +293,46 @@ void HttpServer::start() {
     server_->listen_after_bind();
     finished_.store(true);
   });
+}
+
+void HttpServer::reload_access(double uptime_s) {
+  const auto& s = ctx_->settings;
+  const auto log = daemon::log();
+  if (access_->token_required()) {
+    try {
+      const std::string applied = access_->reload_token(s.http_token_file);
+      log->info("SIGHUP: http.token_file {}", applied);
+      ctx_->token_reloads.record(true, applied, uptime_s);
+    } catch (const std::exception& e) {
+      log->error("SIGHUP: token not reloaded, keeping the current one: {}", e.what());
+      ctx_->token_reloads.record(false, e.what(), uptime_s);
+    }
+  }
+  if (!s.http_tls_cert.empty()) {
+    try {
+      // Loaded and checked whole (chain, key, the key matching the certificate) before the gate
+      // hands it to any connection.
+      auto next = std::make_shared<const http::TlsContext>(s.http_tls_cert.string(), s.http_tls_key.string());
+      const std::string applied = "applied: " + next->describe();
+      gate_->set_tls(std::move(next));
+      log->info("SIGHUP: TLS certificate {}", applied);
+      ctx_->tls_reloads.record(true, applied, uptime_s);
+    } catch (const std::exception& e) {
+      log->error("SIGHUP: TLS certificate not reloaded, keeping the current one: {}", e.what());
+      ctx_->tls_reloads.record(false, e.what(), uptime_s);
+    }
+  }
+}
+
+void AccessReloads::record(bool ok, std::string reason, double at_uptime_s) {
+  (ok ? reloads_ : failures_).fetch_add(1);
+  std::lock_guard lock(mu_);
+  last_ = PipelineStatus::Reload{ok, std::move(reason), at_uptime_s};
+}
+
+std::optional<PipelineStatus::Reload> AccessReloads::last() const {
+  std::lock_guard lock(mu_);
+  return last_;
 }
 
 bool HttpServer::stop(std::chrono::milliseconds grace) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -33,6 +34,21 @@ struct HttpCounters {
   std::atomic<std::uint64_t> tls_failures{0};   // TLS handshakes that failed (not a timeout)
 };
 
+// What SIGHUP did to one of the access files (the token; the certificate and key), reported as the
+// calibration's reload is (/v1/status http.token and http.tls, /metrics naneye_http_*_reload*).
+class AccessReloads {
+ public:
+  void record(bool ok, std::string reason, double at_uptime_s);
+  std::uint64_t reloads() const { return reloads_.load(); }
+  std::uint64_t failures() const { return failures_.load(); }
+  std::optional<PipelineStatus::Reload> last() const;
+
+ private:
+  std::atomic<std::uint64_t> reloads_{0}, failures_{0};
+  mutable std::mutex mu_;  // guards last_
+  std::optional<PipelineStatus::Reload> last_;
+};
+
 // Shared by the handlers; counters are read by /v1/status and /metrics.
 struct HttpContext {
   Settings settings;
@@ -45,6 +61,7 @@ struct HttpContext {
   std::atomic<std::uint64_t> depth_served{0};  // /v1/depth answered 200
   std::atomic<bool> stopping{false};
   HttpCounters connections;
+  AccessReloads token_reloads, tls_reloads;  // only with a token file, only with TLS
   // The JSON text of the latest result served, built once for all HTTP threads (/v1/depth and
   // /v1/events); only HTTP threads take the mutex, never the pipeline.
   std::mutex result_json_mutex;
@@ -65,6 +82,10 @@ class HttpServer {
   // Serves on its own thread (the accept loop), a poll thread reading request heads and a pool of
   // settings.http_threads running handlers (daemon/src/http_gate.hpp).
   void start();
+  // SIGHUP (the main thread): reads the token file and the certificate and key again, when the
+  // settings name them, each checked as at start; a file that fails keeps the one in use. Each
+  // outcome is logged and recorded in the context, stamped `uptime_s`.
+  void reload_access(double uptime_s);
   // Closes the listening socket and ends event streams; waits up to `grace` for the server's
   // threads. False when connections were still open after it (the caller may exit anyway).
   bool stop(std::chrono::milliseconds grace);
@@ -73,8 +94,7 @@ class HttpServer {
 
  private:
   std::unique_ptr<HttpContext> ctx_;
-  // Both outlive server_ (declared before it): its threads use them until it is destroyed.
-  std::unique_ptr<http::TlsContext> tls_;  // null: plain HTTP
+  // Outlives server_ (declared before it): its threads use it until it is destroyed.
   std::unique_ptr<http::Access> access_;
   std::unique_ptr<httplib::Server> server_;
   http::Gate* gate_ = nullptr;  // owned by server_

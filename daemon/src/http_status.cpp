@@ -33,6 +33,18 @@ nlohmann::json scene_json(const PipelineStatus& s) {
           {"dense_pairs", s.dense_pairs}};
 }
 
+nlohmann::json reload_json(const std::optional<PipelineStatus::Reload>& r) {
+  if (!r) return nullptr;
+  return {{"ok", r->ok}, {"reason", r->reason}, {"uptime_s", r->at_uptime_s}};
+}
+
+// A SIGHUP's outcome for an access file; null when the settings name no such file.
+nlohmann::json access_reload_json(bool configured, const AccessReloads& r) {
+  if (!configured) return nullptr;
+  return {
+      {"reloads", r.reloads()}, {"reload_failures", r.failures()}, {"last_reload", reload_json(r.last())}};
+}
+
 // The folder (with its trailing '/') of a file:// URI's path, or empty.
 std::string folder_of_uri(const std::string& uri) {
   constexpr std::string_view scheme = "file://";
@@ -61,6 +73,10 @@ void redact_paths(nlohmann::json& status, const HttpContext& ctx, const Pipeline
   // file names, which say what is in use without mapping the machine.
   std::vector<std::string> folders;
   for (const auto& f : ctx.settings.calibration) folders.push_back(f.parent_path().string() + "/");
+  // A refused token or certificate reload names its file.
+  for (const auto* f :
+       {&ctx.settings.http_token_file, &ctx.settings.http_tls_cert, &ctx.settings.http_tls_key})
+    if (!f->empty()) folders.push_back(f->parent_path().string() + "/");
   if (!ctx.settings.sample_capture.empty())
     folders.push_back(ctx.settings.sample_capture.parent_path().string() + "/");
   for (const auto* uri : {&ctx.settings.source_uri, &s.choice.uri}) folders.push_back(folder_of_uri(*uri));
@@ -110,10 +126,7 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
            {{"files", calib_files},
             {"reloads", s.calibration_reloads},
             {"reload_failures", s.calibration_reload_failures},
-            {"last_reload", s.last_reload ? nlohmann::json{{"ok", s.last_reload->ok},
-                                                           {"reason", s.last_reload->reason},
-                                                           {"uptime_s", s.last_reload->at_uptime_s}}
-                                          : nlohmann::json(nullptr)},
+            {"last_reload", reload_json(s.last_reload)},
             {"baseline_mm", rig->baseline_mm()}}},
           {"http",
            {{"connections", ctx.connections.connections.load()},
@@ -122,7 +135,9 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
             {"idle_evicted", ctx.connections.idle_evicted.load()},
             {"head_timeouts", ctx.connections.head_timeouts.load()},
             {"oversize", ctx.connections.oversize.load()},
-            {"tls_failures", ctx.connections.tls_failures.load()}}},
+            {"tls_failures", ctx.connections.tls_failures.load()},
+            {"token", access_reload_json(!ctx.settings.http_token_file.empty(), ctx.token_reloads)},
+            {"tls", access_reload_json(!ctx.settings.http_tls_cert.empty(), ctx.tls_reloads)}}},
           {"events",
            {{"clients", ctx.sse_clients.load()},
             {"clients_dropped", ctx.sse_dropped.load()},

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <openssl/err.h>
 #include <openssl/ssl.h>
+#include <openssl/x509.h>
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -50,11 +51,28 @@ TlsContext::~TlsContext() {
   SSL_CTX_free(ctx_);
 }
 
-Transport::Transport(int fd, const TlsContext* tls) : fd_(fd) {
-  if (!tls) return;
+std::string TlsContext::describe() const {
+  X509* cert = SSL_CTX_get0_certificate(ctx_);
+  if (!cert) return "no certificate";
+  std::string out;
+  if (BIO* bio = BIO_new(BIO_s_mem())) {
+    X509_NAME_print_ex(bio, X509_get_subject_name(cert), 0, XN_FLAG_RFC2253);
+    BIO_puts(bio, ", valid until ");
+    ASN1_TIME_print(bio, X509_get0_notAfter(cert));
+    char* text = nullptr;
+    const long n = BIO_get_mem_data(bio, &text);
+    if (n > 0) out.assign(text, static_cast<std::size_t>(n));
+    BIO_free(bio);
+  }
+  ERR_clear_error();
+  return out;
+}
+
+Transport::Transport(int fd, std::shared_ptr<const TlsContext> tls) : fd_(fd), tls_(std::move(tls)) {
+  if (!tls_) return;
   // OpenSSL reads and writes the socket itself: non-blocking, so that every step returns at once.
   ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
-  ssl_ = SSL_new(tls->get());
+  ssl_ = SSL_new(tls_->get());
   if (ssl_) SSL_set_fd(ssl_, fd);
   established_ = false;
 }

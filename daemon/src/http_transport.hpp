@@ -5,6 +5,7 @@
 // handshake is one more slow client (head deadline, eviction, connection cap), never a held thread.
 #include <chrono>
 #include <cstddef>
+#include <memory>
 #include <string>
 
 struct ssl_st;
@@ -15,7 +16,8 @@ namespace naneye::daemon::http {
 // What one non-blocking step did, or what it waits for.
 enum class Io { done, want_read, want_write, closed, failed };
 
-// The server's certificate and key, loaded once at start.
+// The server's certificate and key, loaded at start and again on SIGHUP (a new context for the
+// connections that follow; those open keep theirs).
 class TlsContext {
  public:
   // PEM files; throws std::runtime_error naming the file and OpenSSL's reason.
@@ -24,6 +26,9 @@ class TlsContext {
   TlsContext(const TlsContext&) = delete;
   TlsContext& operator=(const TlsContext&) = delete;
   ssl_ctx_st* get() const { return ctx_; }
+  // The certificate's subject and end of validity ("CN=localhost, valid until Dec  2 14:00:00 2026
+  // GMT"): what a reload says it applied.
+  std::string describe() const;
 
  private:
   ssl_ctx_st* ctx_ = nullptr;
@@ -31,8 +36,9 @@ class TlsContext {
 
 class Transport {
  public:
-  // `tls` null: plain. The transport does not own `fd` (the gate closes it).
-  Transport(int fd, const TlsContext* tls);
+  // `tls` null: plain. The transport does not own `fd` (the gate closes it); it keeps `tls` for
+  // as long as its session lives, whatever context later connections get.
+  Transport(int fd, std::shared_ptr<const TlsContext> tls);
   ~Transport();
   Transport(const Transport&) = delete;
   Transport& operator=(const Transport&) = delete;
@@ -57,6 +63,7 @@ class Transport {
   Io ssl_result(int ret);
 
   int fd_;
+  std::shared_ptr<const TlsContext> tls_;
   ssl_st* ssl_ = nullptr;
   bool established_ = true;
   bool failed_ = false;  // a fatal TLS error: no close_notify may follow (SSL_shutdown(3))

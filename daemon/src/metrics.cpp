@@ -28,6 +28,18 @@ void histogram(std::ostringstream& os, const std::string& name, const std::strin
   os << name << "_sum " << l.sum_s << '\n' << name << "_count " << cumulative << '\n';
 }
 
+// Reloads on SIGHUP of one kind (calibration, token, certificate), as the calibration's first were.
+void reloads(std::ostringstream& os, const std::string& prefix, const std::string& what,
+             std::uint64_t applied, std::uint64_t refused,
+             const std::optional<PipelineStatus::Reload>& last) {
+  counter(os, prefix + "_reloads_total", what + " reloads applied (SIGHUP).", applied);
+  counter(os, prefix + "_reload_failures_total", what + " reloads refused (the previous one stayed).",
+          refused);
+  gauge(os, prefix + "_last_reload_ok",
+        "1: the latest reload was applied, 0: it was refused, -1: no reload yet.",
+        last ? (last->ok ? 1.0 : 0.0) : -1.0);
+}
+
 }  // namespace
 
 std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
@@ -41,12 +53,12 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
     counter(os, std::string("naneye_source_") + name + "_total", help, v);
   });
   counter(os, "naneye_source_opens_total", "Times the source was opened.", s.source_opens);
-  counter(os, "naneye_calibration_reloads_total", "Calibration reloads (SIGHUP).", s.calibration_reloads);
-  counter(os, "naneye_calibration_reload_failures_total",
-          "Calibration reloads refused (the previous calibration stayed).", s.calibration_reload_failures);
-  gauge(os, "naneye_calibration_last_reload_ok",
-        "1: the latest reload was applied, 0: it was refused, -1: no reload yet.",
-        s.last_reload ? (s.last_reload->ok ? 1.0 : 0.0) : -1.0);
+  reloads(os, "naneye_calibration", "Calibration", s.calibration_reloads, s.calibration_reload_failures,
+          s.last_reload);
+  reloads(os, "naneye_http_token", "Bearer token (http.token_file)", ctx.token_reloads.reloads(),
+          ctx.token_reloads.failures(), ctx.token_reloads.last());
+  reloads(os, "naneye_http_tls", "TLS certificate and key", ctx.tls_reloads.reloads(),
+          ctx.tls_reloads.failures(), ctx.tls_reloads.last());
   counter(os, "naneye_events_sent_total", "Server-sent events written to clients.", ctx.sse_events.load());
   counter(os, "naneye_events_clients_dropped_total", "Event-stream clients dropped for falling behind.",
           ctx.sse_dropped.load());

@@ -51,7 +51,8 @@ daemon::Settings load(const Flags& f) {
   return s;
 }
 
-void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& settings) {
+void watchdog_and_signals(daemon::Pipeline& pipeline, daemon::HttpServer& server,
+                          const daemon::Settings& settings) {
   std::uint64_t usec = 0;
   const bool watchdog = sd_watchdog_enabled(0, &usec) > 0;
   const auto tick =
@@ -89,6 +90,9 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, const daemon::Settings& se
         daemon::log()->error("SIGHUP: calibration not reloaded, keeping the current one: {}", why);
         pipeline.reload_refused(why);
       }
+      // The token file and the certificate, each on its own: a bad one keeps its predecessor and
+      // stops neither the calibration's reload nor the other's.
+      server.reload_access(pipeline.status().uptime_s);
       sd_notify(0, "READY=1");
     }
     const auto now = std::chrono::steady_clock::now();
@@ -166,7 +170,7 @@ int main(int argc, char** argv) {
     sd_notifyf(0, "READY=1\nSTATUS=serving on %s:%d, source %s", settings.http_host.c_str(), port,
                choice.uri.c_str());
 
-    watchdog_and_signals(pipeline, settings);
+    watchdog_and_signals(pipeline, server, settings);
 
     sd_notify(0, "STOPPING=1");
     const auto t0 = std::chrono::steady_clock::now();

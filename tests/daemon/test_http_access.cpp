@@ -201,3 +201,76 @@ TEST_F(NaneyedAccess, ATokenFileThatIsMissingOrTooShortIsRefusedAtStart) {
   EXPECT_NE((e.log() + e.out()).find("http.token_file: no such file"), std::string::npos)
       << e.log() << e.out();
 }
+
+TEST_F(NaneyedAccess, OnSighupTheTokenFileIsReadAgainAndABadOneKeepsTheTokenInUse) {
+  // A token is rotated because it may have leaked: after SIGHUP the old one and the sessions it
+  // bought are refused, the new one works; a file that cannot be used leaves the token as it was.
+  constexpr const char* kNewToken = "9b2d7e4f1a6c8e0d3b5f7a9c1e3d5b7f";
+  start(token_config() + source(capture(12)));
+  const auto with = [&](const std::string& token, const std::string& path = "/v1/status") {
+    return round_trip(port, get(path, host() + "Authorization: Bearer " + token + "\r\n"));
+  };
+  const auto status_with = [&](const std::string& token) {
+    return nlohmann::json::parse(body_of(with(token)));
+  };
+  const std::string login = std::string("token=") + kToken;
+  const auto ok =
+      round_trip(port, "POST /v1/session HTTP/1.1\r\n" + host() +
+                           "Content-Type: application/x-www-form-urlencoded\r\nContent-Length: " +
+                           std::to_string(login.size()) + "\r\nConnection: close\r\n\r\n" + login);
+  const std::string set_cookie = header_of(ok, "Set-Cookie");
+  const std::string cookie = "Cookie: " + set_cookie.substr(0, set_cookie.find(';')) + "\r\n";
+  ASSERT_EQ(status_of(round_trip(port, get("/v1/status", host() + cookie))), 200);
+  EXPECT_TRUE(status_with(kToken)["http"]["token"]["last_reload"].is_null());
+
+  const auto file = dir.path / "token";
+  std::ofstream(file, std::ios::trunc) << kNewToken << "\n";
+  daemon->signal(SIGHUP);
+  // The reload happens on the daemon's main thread: wait (bounded) until the new token is taken.
+  for (int k = 0; k < 300 && status_of(with(kNewToken)) != 200; ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(status_of(with(kNewToken)), 200) << daemon->log();
+  EXPECT_EQ(status_of(with(kToken)), 401) << "the old token still opens the daemon";
+  EXPECT_EQ(status_of(round_trip(port, get("/v1/status", host() + cookie))), 401)
+      << "a session bought with the old token outlived it";
+  auto s = status_with(kNewToken)["http"]["token"];
+  EXPECT_EQ(s["reloads"], 1);
+  EXPECT_EQ(s["last_reload"]["ok"], true);
+  EXPECT_NE(s["last_reload"]["reason"].get<std::string>().find("a new token"), std::string::npos) << s;
+
+  struct Case {
+    std::string text, reason;
+  };
+  int failures = 0;
+  for (const Case& c : {Case{"short\n", "at least 16 characters"}, Case{"", "at least 16"},
+                        Case{"two tokens 9b2d7e4f1a6c8e0d3b5f\n", "without spaces"}}) {
+    std::ofstream(file, std::ios::trunc) << c.text;
+    daemon->signal(SIGHUP);
+    ++failures;
+    for (int k = 0; k < 300 && status_with(kNewToken)["http"]["token"]["reload_failures"] != failures; ++k)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    s = status_with(kNewToken)["http"]["token"];
+    EXPECT_EQ(s["reload_failures"], failures) << daemon->log();
+    EXPECT_EQ(s["last_reload"]["ok"], false);
+    EXPECT_NE(s["last_reload"]["reason"].get<std::string>().find(c.reason), std::string::npos) << s;
+    EXPECT_NE(s["last_reload"]["reason"].get<std::string>().find(file.string()), std::string::npos)
+        << "a loopback client is shown the file's path";
+    EXPECT_EQ(status_of(with(kNewToken)), 200) << "a refused file changed the token in use";
+    EXPECT_EQ(status_of(with(kToken)), 401);
+  }
+  // Rotated by a rename that has not happened yet: no file at all.
+  std::filesystem::remove(file);
+  daemon->signal(SIGHUP);
+  for (int k = 0; k < 300 && status_with(kNewToken)["http"]["token"]["reload_failures"] != 4; ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  s = status_with(kNewToken)["http"]["token"];
+  EXPECT_NE(s["last_reload"]["reason"].get<std::string>().find("cannot be read"), std::string::npos) << s;
+  EXPECT_EQ(status_of(with(kNewToken)), 200);
+  const auto m = body_of(with(kNewToken, "/metrics"));
+  EXPECT_NE(m.find("\nnaneye_http_token_reloads_total 1\n"), std::string::npos) << m;
+  EXPECT_NE(m.find("\nnaneye_http_token_reload_failures_total 4\n"), std::string::npos);
+  EXPECT_NE(m.find("\nnaneye_http_token_last_reload_ok 0\n"), std::string::npos);
+  EXPECT_NE(m.find("\nnaneye_http_tls_last_reload_ok -1\n"), std::string::npos) << "no TLS: no reload";
+  EXPECT_NE(daemon->log().find("token not reloaded, keeping the current one"), std::string::npos);
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0) << daemon->log();
+}

@@ -5,12 +5,15 @@
 #include <netinet/in.h>
 #include <openssl/evp.h>
 #include <openssl/pem.h>
+#include <openssl/ssl.h>
 #include <openssl/x509.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <functional>
 
 #include "naneyed_fixture.hpp"
 
@@ -18,14 +21,15 @@ using namespace naneye::daemon::test;
 
 namespace {
 
-// A self-signed P-256 certificate for "localhost", valid for an hour, written as PEM.
-bool write_self_signed(const std::filesystem::path& cert, const std::filesystem::path& key) {
+// A self-signed P-256 certificate for "localhost", valid for an hour, written as PEM; `serial`
+// tells one certificate from another.
+bool write_self_signed(const std::filesystem::path& cert, const std::filesystem::path& key, long serial = 1) {
   EVP_PKEY* pkey = EVP_EC_gen("P-256");
   X509* x = X509_new();
   bool ok = pkey && x;
   if (ok) {
     X509_set_version(x, 2);
-    ASN1_INTEGER_set(X509_get_serialNumber(x), 1);
+    ASN1_INTEGER_set(X509_get_serialNumber(x), serial);
     X509_gmtime_adj(X509_getm_notBefore(x), 0);
     X509_gmtime_adj(X509_getm_notAfter(x), 3600);
     X509_set_pubkey(x, pkey);
@@ -59,6 +63,29 @@ int connect_to(int port) {
     return -1;
   }
   return fd;
+}
+
+// The serial number of the certificate the server presents in a fresh handshake, -1 if none
+// (reads bounded by a 5 s socket timeout: a server that stalls fails the test, not hangs it).
+long served_serial(int port) {
+  const int fd = connect_to(port);
+  if (fd < 0) return -1;
+  timeval five{5, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &five, sizeof five);
+  SSL_CTX* ctx = SSL_CTX_new(TLS_client_method());
+  SSL* ssl = ctx ? SSL_new(ctx) : nullptr;
+  long serial = -1;
+  if (ssl && SSL_set_fd(ssl, fd) == 1 && SSL_connect(ssl) == 1) {
+    if (X509* c = SSL_get1_peer_certificate(ssl)) {
+      serial = ASN1_INTEGER_get(X509_get0_serialNumber(c));
+      X509_free(c);
+    }
+    SSL_shutdown(ssl);
+  }
+  SSL_free(ssl);
+  SSL_CTX_free(ctx);
+  close(fd);
+  return serial;
 }
 
 // Seconds until the server closes `fd` (reads return 0 or fail), or -1 after `limit_s`.
@@ -175,4 +202,69 @@ TEST_F(NaneyedTls, ACertificateThatDoesNotLoadIsRefusedByCheckConfig) {
   DaemonProcess bad({"--config", cfg.string(), "--check-config"}, dir.path / "bad.log");
   EXPECT_EQ(bad.wait_exit(), 1);
   EXPECT_NE(bad.log().find("http.tls_cert " + garbage.string()), std::string::npos) << bad.log();
+}
+
+TEST_F(NaneyedTls, OnSighupANewCertificateIsServedAndOneThatDoesNotLoadKeepsTheOld) {
+  start_tls("");
+  const auto cert = dir.path / "cert.pem", key = dir.path / "key.pem";
+  ASSERT_EQ(served_serial(port), 1);
+  const auto tls_status = [&] {
+    const auto r = tls->Get("/v1/status");
+    return r ? nlohmann::json::parse(r->body)["http"]["tls"] : nlohmann::json();
+  };
+  EXPECT_TRUE(tls_status()["last_reload"].is_null());
+
+  // A renewed certificate (and its new key): the handshakes that follow present it.
+  ASSERT_TRUE(write_self_signed(cert, key, 2));
+  daemon->signal(SIGHUP);
+  for (int k = 0; k < 300 && served_serial(port) != 2; ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(served_serial(port), 2) << daemon->log();
+  auto s = tls_status();
+  EXPECT_EQ(s["reloads"], 1);
+  EXPECT_EQ(s["last_reload"]["ok"], true);
+  EXPECT_NE(s["last_reload"]["reason"].get<std::string>().find("CN=localhost, valid until"),
+            std::string::npos)
+      << s;
+
+  // Each way a rotation goes wrong: a certificate that does not parse; a new certificate whose key
+  // is not there yet (the old key does not match it); no certificate file at all.
+  const auto other_key = dir.path / "other-key.pem", other_cert = dir.path / "other-cert.pem";
+  ASSERT_TRUE(write_self_signed(other_cert, other_key, 3));
+  struct Case {
+    std::function<void()> damage;
+    std::string reason;
+  };
+  const std::vector<Case> cases{
+      {[&] {
+         std::ofstream(cert, std::ios::trunc)
+             << "-----BEGIN CERTIFICATE-----\nnot base64\n-----END CERTIFICATE-----\n";
+       },
+       "http.tls_cert " + cert.string()},
+      {[&] {
+         std::filesystem::copy_file(other_cert, cert, std::filesystem::copy_options::overwrite_existing);
+       },
+       "http.tls_key " + key.string()},
+      {[&] { std::filesystem::remove(cert); }, "http.tls_cert " + cert.string()},
+  };
+  int failures = 0;
+  for (const auto& c : cases) {
+    c.damage();
+    daemon->signal(SIGHUP);
+    ++failures;
+    for (int k = 0; k < 300 && tls_status()["reload_failures"] != failures; ++k)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    s = tls_status();
+    EXPECT_EQ(s["reload_failures"], failures) << daemon->log();
+    EXPECT_EQ(s["last_reload"]["ok"], false);
+    EXPECT_NE(s["last_reload"]["reason"].get<std::string>().find(c.reason), std::string::npos) << s;
+    EXPECT_EQ(served_serial(port), 2) << "a refused certificate replaced the one in use";
+  }
+  const auto m = tls->Get("/metrics");
+  ASSERT_TRUE(m);
+  EXPECT_NE(m->body.find("\nnaneye_http_tls_reloads_total 1\n"), std::string::npos) << m->body;
+  EXPECT_NE(m->body.find("\nnaneye_http_tls_reload_failures_total 3\n"), std::string::npos);
+  EXPECT_NE(m->body.find("\nnaneye_http_tls_last_reload_ok 0\n"), std::string::npos);
+  EXPECT_NE(daemon->log().find("TLS certificate not reloaded, keeping the current one"), std::string::npos);
+  EXPECT_EQ(daemon->stop(SIGTERM).first, 0) << daemon->log();
 }

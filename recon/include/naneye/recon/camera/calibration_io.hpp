@@ -2,7 +2,6 @@
 // Calibration files: OpenCV FileStorage YAML with the keys of OpenCV's stereo_calib sample
 // (M1 D1 M2 D2 R T) plus image_width / image_height, optionally split over an intrinsics and an
 // extrinsics file, optionally with *_sigma entries. docs/camera-model.md describes the format.
-// Written with FileStorage, read with yaml-cpp (calibration_yaml.hpp says why).
 
 #include <filesystem>
 #include <stdexcept>
