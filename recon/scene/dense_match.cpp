@@ -17,9 +17,13 @@ cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
   // no uniqueness or speckle filtering: validity is decided after the sub-pixel step. The
   // left-right check is SGBM's own (disp12MaxDiff): the right view's disparities are the minima of
   // the same aggregated cost along each right pixel's diagonal, so one run gives both views (a
-  // second run on the mirrored pair cost as much as the first and refused no more, docs/scene.md).
+  // second run on the mirrored pair cost as much again and lowered bad-5 by at most 0.01 point,
+  // docs/scene.md).
   const int area = s.sgm_block * s.sgm_block;
-  const int lr = std::max(0, static_cast<int>(std::lround(s.lr_tolerance_px)));
+  // SGBM compares the right view's integer disparity with both roundings of the left's (passing if
+  // either is within disp12MaxDiff): the bracket adds up to 1 px, so a tolerance of t px on the
+  // disparity is disp12MaxDiff = t - 1.
+  const int lr = std::max(0, static_cast<int>(std::lround(s.lr_tolerance_px)) - 1);
   return cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block, 8 * area, 32 * area, lr, 0,
                                 0, 0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
 }

@@ -4,6 +4,7 @@
 // allocations of that bare SGBM call on the same image size.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 
@@ -17,10 +18,10 @@ namespace {
 // Allocations of one StereoSGBM::compute call with the matcher's own settings, once warm.
 long sgbm_allocations(const recon::scene::RectifiedMatcher& m, int width, int height) {
   const auto& s = m.settings();
-  auto sgbm =
-      cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block, 8 * s.sgm_block * s.sgm_block,
-                             32 * s.sgm_block * s.sgm_block, static_cast<int>(std::lround(s.lr_tolerance_px)),
-                             0, 0, 0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
+  auto sgbm = cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block,
+                                     8 * s.sgm_block * s.sgm_block, 32 * s.sgm_block * s.sgm_block,
+                                     std::max(0, static_cast<int>(std::lround(s.lr_tolerance_px)) - 1), 0, 0,
+                                     0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
   cv::Mat a(height, width, CV_8UC1), b(height, width, CV_8UC1), d(height, width, CV_16SC1);
   cv::randu(a, 0, 255);
   cv::randu(b, 0, 255);
