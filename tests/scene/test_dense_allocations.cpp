@@ -32,6 +32,10 @@ long sgbm_allocations(const recon::scene::RectifiedMatcher& m, int width, int he
 }
 
 TEST(DenseAllocations, NoneOncePairsFlow) {
+  // As the processor runs it (app/src/processor.cpp): OpenCV on the calling thread. With its pool,
+  // how SGBM's rows are split over workers, and the pool's own bookkeeping, vary from call to call,
+  // and so do the allocations counted (the test failed 1 run in 4 on a loaded machine).
+  cv::setNumThreads(1);
   for (bool bayer : {false, true}) {
     const auto& a = test::textured_pair("plane", bayer);
     const auto& b = test::textured_pair("sphere", bayer);
