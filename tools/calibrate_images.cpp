@@ -13,19 +13,6 @@
 #include "naneye/recon/corners/stereo_ids.hpp"
 
 namespace naneye::tools {
-namespace {
-
-std::vector<recon::BoardCorner> corners_of(const recon::CornerResult& r) {
-  std::vector<recon::BoardCorner> out;
-  for (int i = 0; i < r.count; ++i) {
-    const auto& c = r.corners[static_cast<std::size_t>(i)];
-    out.push_back({c.row, c.col, c.px});
-  }
-  return out;
-}
-
-}  // namespace
-
 recon::StereoRig pinhole_rig(int width, int height) {
   // Only a scale for the detector: without distortion it works in raw pixels and fx cancels; the
   // calibration starts from OpenCV's closed form, not from this. A horizontal baseline, right eye on

@@ -75,8 +75,6 @@ std::vector<InputUri> expand_input(const std::string& input) {
   return uris;
 }
 
-namespace {
-
 std::vector<recon::BoardCorner> corners_of(const recon::CornerResult& r) {
   std::vector<recon::BoardCorner> out;
   for (int i = 0; i < r.count; ++i) {
@@ -85,8 +83,6 @@ std::vector<recon::BoardCorner> corners_of(const recon::CornerResult& r) {
   }
   return out;
 }
-
-}  // namespace
 
 CollectedViews collect_views(const std::vector<std::string>& inputs, const recon::StereoRig& guess,
                              const recon::CornerSettings& corners, long long max_pairs, Progress& progress) {

@@ -52,6 +52,9 @@ struct InputUri {
 };
 std::vector<InputUri> expand_input(const std::string& input);
 
+// One eye's detected corners as the calibration takes them (grid position and pixel).
+std::vector<recon::BoardCorner> corners_of(const recon::CornerResult& r);
+
 // Reads every pair of every input and detects the board in each eye with a full search (views are
 // independent). `guess` models the lenses for the detector. Throws std::runtime_error naming an
 // unreadable input.
