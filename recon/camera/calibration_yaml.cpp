@@ -1,5 +1,6 @@
 #include "calibration_yaml.hpp"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <string_view>
 
 #include "naneye/recon/camera/calibration_io.hpp"
@@ -157,6 +159,35 @@ std::string read_text(const std::filesystem::path& path) {
   return text;
 }
 
+// Takes yaml-cpp's parse events and keeps none: counting documents without building them.
+class DiscardEvents final : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+  }
+  void OnMapEnd() override {}
+};
+
+// Whether the text holds more than one YAML document, asking the parser for two at most.
+// YAML::LoadAll asks until the parser says there are no more, and yaml-cpp 0.7's parser never says
+// so when a flow indicator (`,`, `]`, `}`) stands outside a flow collection: it reports an empty
+// document without consuming the token, so LoadAll looped, allocating a null node each time
+// (tests/fuzz/corpus/calib_yaml/hang_yamlcpp_loadall.yaml; upstream jbeder/yaml-cpp#1040, fixed
+// after 0.8 by #1319). Each HandleNextDocument call returns; only the loop around it did not end.
+bool more_than_one_document(const std::string& text) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DiscardEvents discard;
+  return parser.HandleNextDocument(discard) && parser.HandleNextDocument(discard);
+}
+
 }  // namespace
 
 std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
@@ -173,17 +204,16 @@ std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
         "not an OpenCV FileStorage YAML file: the first line must be %YAML:1.0, as FileStorage writes it");
   text.erase(0, eol);
 
-  std::vector<YAML::Node> docs;
+  YAML::Node root;
   try {
-    docs = YAML::LoadAll(text);
+    if (more_than_one_document(text))
+      fail_file(file, "holds more than one YAML document; a calibration is one");
+    root = YAML::Load(text);  // the first document only: one parser call
   } catch (const YAML::Exception& e) {
     fail_file(file, (e.mark.line >= 0 ? "line " + std::to_string(e.mark.line + 1) + ": " : std::string()) +
                         "not valid YAML: " + e.msg);
   }
-  if (docs.empty() || docs[0].IsNull()) fail_file(file, "holds no keys");
-  if (docs.size() > 1)
-    fail_file(file, "holds " + std::to_string(docs.size()) + " YAML documents; a calibration is one");
-  const YAML::Node& root = docs[0];
+  if (root.IsNull()) fail_file(file, "holds no keys");
   if (!root.IsMap()) fail_file(file, "not a map of keys (the top level of a FileStorage file)");
 
   std::vector<YamlKey> keys;

@@ -215,7 +215,8 @@ TEST_F(CalibFiles, TheFileMustBeFileStorageYaml) {
   expect_refused(variant("%YAML:1.0\n", ""), {"variant.yaml", "%YAML:1.0"});
   expect_refused(write("json.yaml", "{\"M1\": {\"rows\": 1}}\n"), {"json.yaml", "%YAML:1.0"});
   expect_refused(write("empty.yaml", "%YAML:1.0\n---\n"), {"empty.yaml", "no keys"});
-  expect_refused(write("two.yaml", text_ + "---\nimage_width: 250\n"), {"two.yaml", "2 YAML documents"});
+  expect_refused(write("two.yaml", text_ + "---\nimage_width: 250\n"),
+                 {"two.yaml", "more than one YAML document"});
   expect_refused(write("nul.yaml", text_ + std::string(1, '\0')), {"nul.yaml", "NUL"});
   // yaml-cpp's own refusal, with the file's line number (the header line counts).
   expect_refused(write("broken.yaml", "%YAML:1.0\n---\nM1: [1, 2\n"),
@@ -223,6 +224,11 @@ TEST_F(CalibFiles, TheFileMustBeFileStorageYaml) {
   // The file on which OpenCV 4.6's FileStorage::open looped forever (fuzz_calib_yaml).
   expect_refused(fs::path(NANEYE_SOURCE_DIR) / "tests/fuzz/corpus/calib_yaml/hang_filestorage_loop.yaml",
                  {"hang_filestorage_loop.yaml", "not valid YAML"});
+  // ... and the one on which yaml-cpp 0.7's LoadAll looped (a `,` outside a flow collection), and
+  // the smallest file of that shape.
+  expect_refused(fs::path(NANEYE_SOURCE_DIR) / "tests/fuzz/corpus/calib_yaml/hang_yamlcpp_loadall.yaml",
+                 {"hang_yamlcpp_loadall.yaml", "more than one YAML document"});
+  expect_refused(write("comma.yaml", "%YAML:1.0\n---\n,\n"), {"comma.yaml", "more than one YAML document"});
 }
 
 TEST_F(CalibFiles, AMatrixNeedsRowsColsASingleChannelTypeAndNumbers) {
