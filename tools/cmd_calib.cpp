@@ -31,7 +31,7 @@ nlohmann::json camera_json(const recon::CameraModel& cam) {
   return j;
 }
 
-void print_text(const nlohmann::json& j) {
+void print_calibration_text(const nlohmann::json& j) {
   for (const char* side : {"left", "right"}) {
     const auto& c = j[side];
     std::cout << side << " camera\n";
@@ -87,7 +87,7 @@ void add_calib_commands(CLI::App& app) {
     if (*json)
       std::cout << j.dump(2) << "\n";
     else
-      print_text(j);
+      print_calibration_text(j);
   });
 
   auto* exp = calib->add_subcommand(

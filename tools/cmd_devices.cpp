@@ -50,7 +50,7 @@ nlohmann::json to_json(const std::vector<driver::UsbBoardInfo>& usb,
   return j;
 }
 
-void print_text(const nlohmann::json& j) {
+void print_device_list_text(const nlohmann::json& j) {
   std::cout << "NanEye readout boards (USB):\n";
   if (j["usb"].empty()) std::cout << "  none\n";
   for (const auto& b : j["usb"]) {
@@ -99,7 +99,7 @@ void add_devices_commands(CLI::App& app) {
     if (*json)
       std::cout << j.dump(2) << "\n";
     else
-      print_text(j);
+      print_device_list_text(j);
   });
 }
 

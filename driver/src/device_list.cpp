@@ -15,6 +15,7 @@
 
 #include "naneye/driver/v4l2_source.hpp"
 #include "usb_open.hpp"
+#include "v4l2_device.hpp"
 
 namespace naneye::driver {
 
@@ -55,12 +56,6 @@ std::vector<UsbBoardInfo> list_usb_boards(const std::vector<UsbProfile>& profile
 
 namespace {
 
-std::string fourcc_text(std::uint32_t f) {
-  std::string s;
-  for (int i = 0; i < 4; ++i) s += static_cast<char>((f >> (8 * i)) & 0xFF);
-  return s;
-}
-
 bool usable(std::uint32_t f) {
   for (auto x : {V4l2Format::y10, V4l2Format::y16, V4l2Format::grey, V4l2Format::sgrbg10})
     if (fourcc(x) == f) return true;
@@ -83,7 +78,7 @@ void query(int fd, V4l2DeviceInfo& dev) {
     d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     if (ioctl(fd, VIDIOC_ENUM_FMT, &d) < 0) break;
     V4l2FormatInfo f;
-    f.fourcc = fourcc_text(d.pixelformat);
+    f.fourcc = v4l2_detail::fourcc_text(d.pixelformat);
     f.description = reinterpret_cast<const char*>(d.description);
     f.usable = usable(d.pixelformat);
     for (std::uint32_t j = 0; j < 64; ++j) {

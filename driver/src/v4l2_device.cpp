@@ -18,13 +18,13 @@ namespace {
   throw V4l2Error(what + ": " + std::strerror(err), err);
 }
 
+}  // namespace
+
 std::string fourcc_text(std::uint32_t f) {
   std::string s(4, ' ');
   for (int i = 0; i < 4; ++i) s[static_cast<std::size_t>(i)] = static_cast<char>((f >> (8 * i)) & 0xFF);
   return s;
 }
-
-}  // namespace
 
 bool V4l2Error::device_gone() const {
   return errno_value == ENODEV || errno_value == ENOENT || errno_value == ENXIO;

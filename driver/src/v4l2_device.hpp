@@ -11,6 +11,9 @@
 
 namespace naneye::driver::v4l2_detail {
 
+// A V4L2 pixel format's four characters ("Y10 ", "BA10"), for messages and device lists.
+std::string fourcc_text(std::uint32_t fourcc);
+
 // errno_value lets callers tell a vanished device (ENODEV, ENOENT, ENXIO) from a real refusal.
 class V4l2Error : public std::runtime_error {
  public:

@@ -10,7 +10,6 @@
 
 namespace naneye::recon::scene {
 namespace {
-constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 
 cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
   // P1, P2: the penalties OpenCV documents for 8-bit images (8 and 32 x channels x block area);
@@ -78,7 +77,7 @@ void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, 
   for (int y = 0; y < h_; ++y) {
     const short* dl = d16_.ptr<short>(y);
     float* ol = integer_.ptr<float>(y);
-    for (int x = 0; x < w_; ++x) ol[x] = dl[x] <= invalid ? kNan : dl[x] / 16.f;
+    for (int x = 0; x < w_; ++x) ol[x] = dl[x] <= invalid ? kNoMatch : dl[x] / 16.f;
   }
 }
 
@@ -170,8 +169,8 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
     float* os = sigma_.ptr<float>(y);
     for (int x = 0; x < w_; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
-      od[x] = kNan;
-      os[x] = kNan;
+      od[x] = kNoMatch;
+      os[x] = kNoMatch;
       if (!vl[x]) continue;
       ++c.candidates;
       const float d = d_[i];
@@ -225,8 +224,8 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       const int xr = static_cast<int>(std::lround(x - od[x]));
       if (xr < 0 || xr >= w_ || best[xr] > od[x] + s_.occlusion_px) {
         ++c.occluded;
-        od[x] = kNan;
-        sigma_.ptr<float>(y)[x] = kNan;
+        od[x] = kNoMatch;
+        sigma_.ptr<float>(y)[x] = kNoMatch;
       } else {
         ++c.valid;
       }

@@ -16,7 +16,6 @@
 
 namespace naneye::recon::scene {
 namespace {
-constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 // GCC's -O2 vectorises only loops whose trip count it knows (its "very cheap" cost model): the box
 // sums and the correlation filter, most of the sub-pixel step's time, ask for its dynamic model
 // (vector body plus a scalar remainder). Plain C++ loops either way.
@@ -152,7 +151,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
   for (int y = 0; y < h_; ++y) {
     const float* sg = integer_.ptr<float>(y);
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNan;
+    for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNoMatch;
   }
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
@@ -165,7 +164,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       mstep[i] = 0;
       msolved[i] = 0;
       if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
-        d_[i] = kNan;
+        d_[i] = kNoMatch;
         continue;
       }
       const double inv = 1.0 / N;
@@ -175,7 +174,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       const double Sgl = S[8 * n + i] - sgr * sl * inv, Sll = S[9 * n + i] - sl * sl * inv;
       const double det = Sww * Sgg - Swg * Swg;
       if (!(det > 0)) {
-        d_[i] = kNan;
+        d_[i] = kNoMatch;
         continue;
       }
       const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
@@ -198,7 +197,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     const bool last = it + 1 == s_.iterations;
     if (last) {
       for (std::size_t i = 0; i < n; ++i)
-        d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNan;  // the window's estimate at the final reference
+        d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNoMatch;  // the window's estimate at the final reference
       break;
     }
     for (std::size_t i = 0; i < n; ++i) mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f;
@@ -281,3 +280,5 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
 }
 
 }  // namespace naneye::recon::scene
+
+#undef NANEYE_VECTORISE  // a unity build puts the next source file after this one

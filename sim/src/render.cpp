@@ -12,7 +12,7 @@
 namespace naneye::sim {
 namespace {
 
-constexpr int kSize = driver::kSensorSize;
+using driver::kSensorSize;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // What one camera needs per frame: the homography from normalized rays to board coordinates and
@@ -103,7 +103,7 @@ std::vector<Eigen::Vector2d> sample_offsets(int n) {
 
 Renderer::RayTable Renderer::build_rays(const recon::CameraModel& cam) {
   RayTable t;
-  constexpr int kc = kSize + 1;
+  constexpr int kc = kSensorSize + 1;
   t.corner.resize(static_cast<std::size_t>(kc) * kc * 2);
   for (int r = 0; r < kc; ++r)
     for (int c = 0; c < kc; ++c) {
@@ -112,14 +112,14 @@ Renderer::RayTable Renderer::build_rays(const recon::CameraModel& cam) {
       out[0] = u.ok() ? u.normalized.x() : std::numeric_limits<double>::quiet_NaN();
       out[1] = u.ok() ? u.normalized.y() : std::numeric_limits<double>::quiet_NaN();
     }
-  const std::size_t pixels = static_cast<std::size_t>(kSize) * kSize;
+  const std::size_t pixels = static_cast<std::size_t>(kSensorSize) * kSensorSize;
   t.centre.resize(pixels * 2);
   t.cos4.resize(pixels);
   t.exact.assign(pixels, 0);
   const std::vector<Eigen::Vector2d> fold_offsets = sample_offsets(kFoldSamplesPerSide);
-  for (int r = 0; r < kSize; ++r) {
-    for (int c = 0; c < kSize; ++c) {
-      const std::size_t p = static_cast<std::size_t>(r) * kSize + c;
+  for (int r = 0; r < kSensorSize; ++r) {
+    for (int c = 0; c < kSensorSize; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * kSensorSize + c;
       const std::size_t k00 = static_cast<std::size_t>(r) * kc + c;
       bool all_valid = true;
       for (std::size_t k : {k00, k00 + 1, k00 + kc, k00 + kc + 1})
@@ -171,8 +171,8 @@ Renderer::Renderer(const recon::StereoRig& rig, const SceneSettings& scene, cons
     : rig_(rig), scene_(scene), sensor_(sensor) {
   if (scene_.supersample < 1 || scene_.supersample > 64)
     throw std::invalid_argument("sim: supersample must be in 1..64");
-  if (rig.left.width() != kSize || rig.left.height() != kSize || rig.right.width() != kSize ||
-      rig.right.height() != kSize)
+  if (rig.left.width() != kSensorSize || rig.left.height() != kSensorSize ||
+      rig.right.width() != kSensorSize || rig.right.height() != kSensorSize)
     throw std::invalid_argument("sim: the rig's cameras must be 250 x 250 (NanEye 2D)");
   rays_[0] = build_rays(rig_.left);
   rays_[1] = build_rays(rig_.right);
@@ -184,7 +184,7 @@ Renderer::Renderer(const recon::StereoRig& rig, const SceneSettings& scene, cons
 }
 
 void Renderer::irradiance_into(Eye eye, const Pose& board, bool present, Scratch& scratch, float* out) const {
-  constexpr int kc = kSize + 1;
+  constexpr int kc = kSensorSize + 1;
   const RayTable& rt = rays_[static_cast<int>(eye)];
   const View view = make_view(rig_, eye, board, scene_);
   const Pattern pattern(scene_);
@@ -215,12 +215,12 @@ void Renderer::irradiance_into(Eye eye, const Pose& board, bool present, Scratch
   // Each pixel: the fraction of its area on the board (weighted by reflectance) and on the background.
   std::vector<float>& board_part = scratch.board_part;
   std::vector<float>& background_part = scratch.background_part;
-  board_part.assign(static_cast<std::size_t>(kSize) * kSize, 0.0f);
-  background_part.assign(static_cast<std::size_t>(kSize) * kSize, 0.0f);
+  board_part.assign(static_cast<std::size_t>(kSensorSize) * kSensorSize, 0.0f);
+  background_part.assign(static_cast<std::size_t>(kSensorSize) * kSensorSize, 0.0f);
   const double inv_edge = 1.0 / static_cast<double>(edge_weights_.size());
-  for (int r = 0; r < kSize; ++r) {
-    for (int c = 0; c < kSize; ++c) {
-      const std::size_t p = static_cast<std::size_t>(r) * kSize + c;
+  for (int r = 0; r < kSensorSize; ++r) {
+    for (int c = 0; c < kSensorSize; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * kSensorSize + c;
       const std::size_t k00 = static_cast<std::size_t>(r) * kc + c, k01 = k00 + 1, k10 = k00 + kc,
                         k11 = k10 + 1;
       const int id = cells[k00];
@@ -299,7 +299,7 @@ void Renderer::irradiance_into(Eye eye, const Pose& board, bool present, Scratch
 }
 
 cv::Mat Renderer::irradiance(Eye eye, const Pose& board) const {
-  cv::Mat m(kSize, kSize, CV_32FC1);
+  cv::Mat m(kSensorSize, kSensorSize, CV_32FC1);
   Scratch scratch;
   irradiance_into(eye, board, scene_.board_present, scratch, m.ptr<float>());
   return m;
@@ -307,8 +307,8 @@ cv::Mat Renderer::irradiance(Eye eye, const Pose& board) const {
 
 RenderedPair Renderer::render(const Pose& board, Rng& rng) const {
   RenderedPair out;
-  out.left.create(kSize, kSize, CV_16UC1);
-  out.right.create(kSize, kSize, CV_16UC1);
+  out.left.create(kSensorSize, kSensorSize, CV_16UC1);
+  out.right.create(kSensorSize, kSensorSize, CV_16UC1);
   Scratch scratch;
   render_into(board, rng, out.left.ptr<std::uint16_t>(), out.right.ptr<std::uint16_t>(), scratch);
   out.truth = compute_truth(rig_, scene_.board, board, scene_.board_present);
@@ -317,7 +317,7 @@ RenderedPair Renderer::render(const Pose& board, Rng& rng) const {
 
 void Renderer::render_into(const Pose& board, Rng& rng, std::uint16_t* left, std::uint16_t* right,
                            Scratch& scratch) const {
-  scratch.light.create(kSize, kSize, CV_32FC1);
+  scratch.light.create(kSensorSize, kSensorSize, CV_32FC1);
   irradiance_into(Eye::left, board, scene_.board_present, scratch, scratch.light.ptr<float>());
   sensor_into(Eye::left, scratch, rng, left);
   irradiance_into(Eye::right, board, scene_.board_present, scratch, scratch.light.ptr<float>());
@@ -326,7 +326,7 @@ void Renderer::render_into(const Pose& board, Rng& rng, std::uint16_t* left, std
 
 void Renderer::render_background_into(Rng& rng, std::uint16_t* left, std::uint16_t* right,
                                       Scratch& scratch) const {
-  scratch.light.create(kSize, kSize, CV_32FC1);
+  scratch.light.create(kSensorSize, kSensorSize, CV_32FC1);
   irradiance_into(Eye::left, Pose{}, false, scratch, scratch.light.ptr<float>());
   sensor_into(Eye::left, scratch, rng, left);
   irradiance_into(Eye::right, Pose{}, false, scratch, scratch.light.ptr<float>());

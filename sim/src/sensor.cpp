@@ -9,10 +9,11 @@
 
 namespace naneye::sim {
 namespace {
-constexpr int kSize = driver::kSensorSize;
+using driver::kSensorSize;
 
 bool reserved(int r, int c) {
-  return driver::Frame::is_padding(r, c) || (r == 0 && c < 4) || (r == kSize - 1 && c >= kSize - 4);
+  return driver::Frame::is_padding(r, c) || (r == 0 && c < 4) ||
+         (r == kSensorSize - 1 && c >= kSensorSize - 4);
 }
 }  // namespace
 
@@ -35,12 +36,12 @@ void Renderer::init_defects() {
   // Defects belong to the die, not to the frame: fixed positions per sensor from defect_seed.
   for (int eye = 0; eye < 2; ++eye) {
     Rng g(sensor_.defect_seed + static_cast<std::uint64_t>(eye));
-    std::uniform_int_distribution<int> pos(0, kSize - 1), kind(0, 2);
+    std::uniform_int_distribution<int> pos(0, kSensorSize - 1), kind(0, 2);
     defects_[eye].clear();
     defect_values_[eye].clear();
     while (static_cast<int>(defects_[eye].size()) < sensor_.defect_pixels) {
       const int r = pos(g), c = pos(g);
-      const int p = r * kSize + c;
+      const int p = r * kSensorSize + c;
       if (reserved(r, c) || std::find(defects_[eye].begin(), defects_[eye].end(), p) != defects_[eye].end())
         continue;
       defects_[eye].push_back(p);
@@ -54,14 +55,14 @@ void Renderer::init_defects() {
     if (sensor_.column_fpn_dn > 0 || sensor_.dsnu_dn > 0 || sensor_.prnu > 0) {
       Rng f(sensor_.defect_seed ^ (0x46504eULL + static_cast<std::uint64_t>(eye)));
       std::normal_distribution<double> n01(0.0, 1.0);
-      std::vector<double> column(kSize);
+      std::vector<double> column(kSensorSize);
       for (auto& c : column) c = sensor_.column_fpn_dn * n01(f);
-      fpn_offset_[eye].resize(static_cast<std::size_t>(kSize) * kSize);
+      fpn_offset_[eye].resize(static_cast<std::size_t>(kSensorSize) * kSensorSize);
       fpn_gain_[eye].resize(fpn_offset_[eye].size());
-      for (int p = 0; p < kSize * kSize; ++p) {
+      for (int p = 0; p < kSensorSize * kSensorSize; ++p) {
         const auto k = static_cast<std::size_t>(p);
         fpn_offset_[eye][k] =
-            static_cast<float>(column[static_cast<std::size_t>(p % kSize)] + sensor_.dsnu_dn * n01(f));
+            static_cast<float>(column[static_cast<std::size_t>(p % kSensorSize)] + sensor_.dsnu_dn * n01(f));
         fpn_gain_[eye][k] = static_cast<float>(std::max(0.0, 1.0 + sensor_.prnu * n01(f)));
       }
     }
@@ -79,22 +80,22 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
   if (sensor_.noise) {
     // One seed from the caller's generator, the per-pixel normals from OpenCV's (fast in every build).
     cv::RNG cv_rng(rng());
-    scratch.noise.create(kSize, kSize, CV_32FC1);
+    scratch.noise.create(kSensorSize, kSensorSize, CV_32FC1);
     cv_rng.fill(scratch.noise, cv::RNG::NORMAL, 0.0, 1.0);
   }
   const auto& g = sensor_.channel_gain;
   const int e = static_cast<int>(eye);
   const bool fpn = !fpn_offset_[e].empty();
-  for (int r = 0; r < kSize; ++r) {
+  for (int r = 0; r < kSensorSize; ++r) {
     const bool reset = r >= sensor_.reset_row && r < sensor_.reset_row + sensor_.reset_rows;
     const float* in = light->ptr<float>(r);
     const float* n01 = sensor_.noise ? scratch.noise.ptr<float>(r) : nullptr;
-    std::uint16_t* o = out + static_cast<std::size_t>(r) * kSize;
-    for (int c = 0; c < kSize; ++c) {
+    std::uint16_t* o = out + static_cast<std::size_t>(r) * kSensorSize;
+    for (int c = 0; c < kSensorSize; ++c) {
       double gain = 1.0;
       // GRBG: row 0 G R G R ..., row 1 B G B G ...
       if (sensor_.bayer) gain = (r & 1) == 0 ? ((c & 1) == 0 ? g[1] : g[0]) : ((c & 1) == 0 ? g[2] : g[1]);
-      const auto k = static_cast<std::size_t>(r * kSize + c);
+      const auto k = static_cast<std::size_t>(r * kSensorSize + c);
       if (fpn) gain *= fpn_gain_[e][k];
       const double signal = std::max(0.0, static_cast<double>(in[c]) * sensor_.white_dn * gain);
       double dn = sensor_.black_level_dn + signal;
@@ -113,11 +114,11 @@ void Renderer::sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* o
   for (std::size_t i = 0; i < defects_[e].size(); ++i) out[defects_[e][i]] = defect_values_[e][i];
   if (sensor_.reference_pixels) {
     for (int c = 0; c < 4; ++c) out[c] = sensor_.reference_row0[c];
-    out[(kSize - 1) * kSize + kSize - 4] = sensor_.reference_row249[0];
-    out[(kSize - 1) * kSize + kSize - 3] = sensor_.reference_row249[1];
+    out[(kSensorSize - 1) * kSensorSize + kSensorSize - 4] = sensor_.reference_row249[0];
+    out[(kSensorSize - 1) * kSensorSize + kSensorSize - 3] = sensor_.reference_row249[1];
   }
-  for (int r = 0; r < kSize; ++r) out[r * kSize + kSize - 1] = sensor_.padding_value;
-  out[(kSize - 1) * kSize + kSize - 2] = sensor_.padding_value;
+  for (int r = 0; r < kSensorSize; ++r) out[r * kSensorSize + kSensorSize - 1] = sensor_.padding_value;
+  out[(kSensorSize - 1) * kSensorSize + kSensorSize - 2] = sensor_.padding_value;
 }
 
 }  // namespace naneye::sim

@@ -11,7 +11,7 @@
 
 namespace naneye::sim {
 namespace {
-constexpr int kSize = driver::kSensorSize;
+using driver::kSensorSize;
 
 struct Wave3 {
   Eigen::Vector3d k;  // rad/mm
@@ -99,7 +99,7 @@ double fast_reflectance(const FastWaves& w, const TextureSettings& t, const Eige
 
 // Active pixels a point may be seen at: column 249 and the last row are padding/reference.
 bool in_active(const Eigen::Vector2d& px) {
-  return px.x() >= -0.5 && px.x() <= kSize - 1.5 && px.y() >= -0.5 && px.y() <= kSize - 1.5;
+  return px.x() >= -0.5 && px.x() <= kSensorSize - 1.5 && px.y() >= -0.5 && px.y() <= kSensorSize - 1.5;
 }
 }  // namespace
 
@@ -111,13 +111,13 @@ TexturedRenderer::TexturedRenderer(const recon::StereoRig& rig, const SensorSett
 
 TexturedRenderer::Rays TexturedRenderer::build(const recon::CameraModel& cam) const {
   Rays r;
-  const std::size_t np = static_cast<std::size_t>(kSize) * kSize;
+  const std::size_t np = static_cast<std::size_t>(kSensorSize) * kSensorSize;
   r.sub.assign(np * n_ * n_ * 2, NAN);
   r.centre.assign(np * 2, NAN);
   r.cos4.assign(np, 0.f);
-  for (int row = 0; row < kSize; ++row)
-    for (int col = 0; col < kSize; ++col) {
-      const std::size_t p = static_cast<std::size_t>(row) * kSize + col;
+  for (int row = 0; row < kSensorSize; ++row)
+    for (int col = 0; col < kSensorSize; ++col) {
+      const std::size_t p = static_cast<std::size_t>(row) * kSensorSize + col;
       for (int i = 0; i < n_; ++i)
         for (int j = 0; j < n_; ++j) {
           const Eigen::Vector2d px(col - 0.5 + (j + 0.5) / n_, row - 0.5 + (i + 0.5) / n_);
@@ -139,7 +139,7 @@ TexturedRenderer::Rays TexturedRenderer::build(const recon::CameraModel& cam) co
 
 void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, cv::Mat& out,
                                   bool fast) const {
-  out.create(kSize, kSize, CV_32FC1);
+  out.create(kSensorSize, kSensorSize, CV_32FC1);
   const auto waves = texture_waves(scene.texture);
   const FastWaves fw = fast_waves(waves);
   const Rays& rt = rays_[eye];
@@ -147,10 +147,10 @@ void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, c
   const Eigen::Matrix3d Rt = eye == 0 ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(rig_.R.transpose());
   const double ref2 = scene.light_reference_mm * scene.light_reference_mm;
   const int nn = n_ * n_;
-  for (int row = 0; row < kSize; ++row) {
+  for (int row = 0; row < kSensorSize; ++row) {
     float* dst = out.ptr<float>(row);
-    for (int col = 0; col < kSize; ++col) {
-      const std::size_t p = static_cast<std::size_t>(row) * kSize + col;
+    for (int col = 0; col < kSensorSize; ++col) {
+      const std::size_t p = static_cast<std::size_t>(row) * kSensorSize + col;
       double sum = 0;
       for (int k = 0; k < nn; ++k) {
         const float x = rt.sub[(p * nn + k) * 2], y = rt.sub[(p * nn + k) * 2 + 1];
@@ -182,15 +182,15 @@ void TexturedRenderer::apply_sensor(int eye, const cv::Mat& light, Rng& rng, cv:
   cv::Mat noise;
   if (sensor_.noise) {
     cv::RNG cv_rng(rng());
-    noise.create(kSize, kSize, CV_32FC1);
+    noise.create(kSensorSize, kSensorSize, CV_32FC1);
     cv_rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
   }
-  out.create(kSize, kSize, CV_16UC1);
+  out.create(kSensorSize, kSensorSize, CV_16UC1);
   const auto& g = sensor_.channel_gain;
-  for (int r = 0; r < kSize; ++r) {
+  for (int r = 0; r < kSensorSize; ++r) {
     const float* in = blurred.ptr<float>(r);
     std::uint16_t* o = out.ptr<std::uint16_t>(r);
-    for (int c = 0; c < kSize; ++c) {
+    for (int c = 0; c < kSensorSize; ++c) {
       double gain = 1.0;
       if (sensor_.bayer) gain = (r & 1) == 0 ? ((c & 1) == 0 ? g[1] : g[0]) : ((c & 1) == 0 ? g[2] : g[1]);
       const double signal = std::max(0.0, static_cast<double>(in[c]) * sensor_.white_dn * gain);
@@ -205,11 +205,11 @@ void TexturedRenderer::apply_sensor(int eye, const cv::Mat& light, Rng& rng, cv:
   std::uint16_t* px = out.ptr<std::uint16_t>();
   if (sensor_.reference_pixels) {
     for (int c = 0; c < 4; ++c) px[c] = sensor_.reference_row0[c];
-    px[(kSize - 1) * kSize + kSize - 4] = sensor_.reference_row249[0];
-    px[(kSize - 1) * kSize + kSize - 3] = sensor_.reference_row249[1];
+    px[(kSensorSize - 1) * kSensorSize + kSensorSize - 4] = sensor_.reference_row249[0];
+    px[(kSensorSize - 1) * kSensorSize + kSensorSize - 3] = sensor_.reference_row249[1];
   }
-  for (int r = 0; r < kSize; ++r) px[r * kSize + kSize - 1] = sensor_.padding_value;
-  px[(kSize - 1) * kSize + kSize - 2] = sensor_.padding_value;
+  for (int r = 0; r < kSensorSize; ++r) px[r * kSensorSize + kSensorSize - 1] = sensor_.padding_value;
+  px[(kSensorSize - 1) * kSensorSize + kSensorSize - 2] = sensor_.padding_value;
   (void)eye;
 }
 
@@ -242,10 +242,10 @@ std::optional<double> TexturedRenderer::truth_depth_at(const Surface& s,
 }
 
 cv::Mat TexturedRenderer::truth_depth(const Surface& s) const {
-  cv::Mat depth(kSize, kSize, CV_64FC1, cv::Scalar(NAN));
-  for (int r = 0; r < kSize; ++r)
-    for (int c = 0; c < kSize; ++c) {
-      const std::size_t p = static_cast<std::size_t>(r) * kSize + c;
+  cv::Mat depth(kSensorSize, kSensorSize, CV_64FC1, cv::Scalar(NAN));
+  for (int r = 0; r < kSensorSize; ++r)
+    for (int c = 0; c < kSensorSize; ++c) {
+      const std::size_t p = static_cast<std::size_t>(r) * kSensorSize + c;
       if (std::isnan(rays_[0].centre[2 * p])) continue;
       if (auto z = truth_depth_at(s, Eigen::Vector2d(c, r))) depth.at<double>(r, c) = *z;
     }

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "naneye/driver/wire_format.hpp"
@@ -57,6 +58,11 @@ inline CaptureTruth write_capture(const std::filesystem::path& file, int pairs, 
     }
   }
   return t;
+}
+
+// The [source] section that replays `file` at its own pace, over and over.
+inline std::string looping_source(const std::filesystem::path& file) {
+  return "[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n";
 }
 
 }  // namespace naneye::daemon::test

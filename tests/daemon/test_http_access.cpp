@@ -35,10 +35,6 @@ std::string header_of(const std::string& response, const std::string& name) {
   return response.substr(from, response.find("\r\n", from) - from);
 }
 
-std::string source(const std::filesystem::path& file) {
-  return "[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n";
-}
-
 // An IPv4 address of this machine that is not loopback, or nothing.
 std::optional<in_addr_t> non_loopback_address() {
   ifaddrs* list = nullptr;
@@ -67,7 +63,7 @@ class NaneyedAccess : public NaneyedTest {
 };
 
 TEST_F(NaneyedAccess, WithATokenFileEveryRequestButHealthzMustPresentIt) {
-  start(token_config() + source(capture(12)));
+  start(token_config() + looping_source(capture(12)));
   auto r = round_trip(port, get("/v1/status", host()));
   EXPECT_EQ(status_of(r), 401) << r;
   EXPECT_EQ(header_of(r, "WWW-Authenticate"), "Bearer realm=\"naneyed\"");
@@ -88,7 +84,7 @@ TEST_F(NaneyedAccess, WithATokenFileEveryRequestButHealthzMustPresentIt) {
 TEST_F(NaneyedAccess, TheViewerTradesTheTokenOnceForAStrictHttpOnlyCookieThatItsStreamsCarry) {
   // EventSource and <img> cannot send an Authorization header: the viewer presents the token once
   // (a form on the 401 page) and the browser sends the cookie with every same-origin request.
-  start(token_config() + source(capture(12)));
+  start(token_config() + looping_source(capture(12)));
   const auto page = round_trip(port, get("/", host()));
   EXPECT_EQ(status_of(page), 401);
   EXPECT_NE(header_of(page, "Content-Type").find("text/html"), std::string::npos);
@@ -141,7 +137,7 @@ TEST_F(NaneyedAccess, TheViewerTradesTheTokenOnceForAStrictHttpOnlyCookieThatIts
 TEST_F(NaneyedAccess, OnLoopbackARequestForAnotherHostNameIsRefused) {
   // DNS rebinding: a page from evil.example, its name re-pointed at 127.0.0.1, reads the daemon
   // through the visitor's browser; the browser still says "Host: evil.example".
-  start(source(capture(12)));
+  start(looping_source(capture(12)));
   const std::string p = std::to_string(port);
   const std::vector<std::string> refused{"evil.example", "evil.example:" + p,
                                          "127.0.0.1:1",  "127.0.0.1.evil.example:" + p,
@@ -166,7 +162,7 @@ TEST_F(NaneyedAccess, BeyondLoopbackStatusNamesFilesWithoutTheirFoldersAndNoToke
   const auto remote = non_loopback_address();
   if (!remote) GTEST_SKIP() << "this machine has no IPv4 address besides loopback";
   const auto file = capture(12);
-  start(source(file), {"--listen", "0.0.0.0:0"});
+  start(looping_source(file), {"--listen", "0.0.0.0:0"});
   EXPECT_NE(daemon->log().find("beyond loopback WITHOUT A TOKEN"), std::string::npos) << daemon->log();
   const auto local = get_json("/v1/status");
   EXPECT_NE(local.dump().find(file.parent_path().string() + "/"), std::string::npos)
@@ -190,7 +186,7 @@ TEST_F(NaneyedAccess, ATokenFileThatIsMissingOrTooShortIsRefusedAtStart) {
   const auto cfg = dir.path / "bad.toml";
   std::ofstream(cfg) << "[calibration]\npath = \"" << calib_path() << "\"\n[http]\nport = 0\ntoken_file = \""
                      << file.string() << "\"\n"
-                     << source(capture(4));
+                     << looping_source(capture(4));
   DaemonProcess d({"--config", cfg.string()}, dir.path / "short.log");
   EXPECT_EQ(d.wait_exit(), 1);
   EXPECT_NE(d.log().find("at least 16 characters"), std::string::npos) << d.log();
@@ -206,7 +202,7 @@ TEST_F(NaneyedAccess, OnSighupTheTokenFileIsReadAgainAndABadOneKeepsTheTokenInUs
   // A token is rotated because it may have leaked: after SIGHUP the old one and the sessions it
   // bought are refused, the new one works; a file that cannot be used leaves the token as it was.
   constexpr const char* kNewToken = "9b2d7e4f1a6c8e0d3b5f7a9c1e3d5b7f";
-  start(token_config() + source(capture(12)));
+  start(token_config() + looping_source(capture(12)));
   const auto with = [&](const std::string& token, const std::string& path = "/v1/status") {
     return round_trip(port, get(path, host() + "Authorization: Bearer " + token + "\r\n"));
   };

@@ -12,13 +12,7 @@
 
 using namespace naneye::daemon::test;
 
-namespace {
-
-std::string source(const std::filesystem::path& file) {
-  return "[source]\nuri = \"file://" + file.string() + "?speed=realtime&loop=1\"\n";
-}
-
-}  // namespace
+namespace {}  // namespace
 
 TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
   // Each connection held one of httplib's 8 pool threads while it sent its head a byte at a time:
@@ -33,7 +27,7 @@ TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
     getrlimit(RLIMIT_NOFILE, &rl);
   }
   if (rl.rlim_cur < 1200) GTEST_SKIP() << "needs 1200 descriptors, the hard limit is " << rl.rlim_max;
-  start(source(capture(20)));
+  start(looping_source(capture(20)));
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
   std::vector<std::unique_ptr<RawClient>> slow;
   for (int i = 0; i < 500; ++i) {
@@ -65,7 +59,7 @@ TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
 }
 
 TEST_F(NaneyedTest, AHeadThatDoesNotArriveInTimeGets408AndTheConnectionCloses) {
-  start("head_timeout_ms = 300\n" + source(capture(12)));
+  start("head_timeout_ms = 300\n" + looping_source(capture(12)));
   RawClient conn(port);
   ASSERT_TRUE(conn.connected());
   const auto t0 = std::chrono::steady_clock::now();
@@ -84,7 +78,7 @@ TEST_F(NaneyedTest, AHeadThatDoesNotArriveInTimeGets408AndTheConnectionCloses) {
 }
 
 TEST_F(NaneyedTest, OversizeRequestsAreRefusedBeforeTheyAreRead) {
-  start(source(capture(12)));
+  start(looping_source(capture(12)));
   struct Case {
     std::string request;
     int status;
@@ -125,7 +119,7 @@ TEST_F(NaneyedTest, OversizeRequestsAreRefusedBeforeTheyAreRead) {
 }
 
 TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503) {
-  start("max_connections = 8\n" + source(capture(12)));
+  start("max_connections = 8\n" + looping_source(capture(12)));
   {
     // Eight idle keep-alive connections (each served once) are closed, oldest first, for newcomers.
     std::vector<std::unique_ptr<RawClient>> idle;
@@ -159,7 +153,7 @@ TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503
 }
 
 TEST_F(NaneyedTest, QueryNumbersAreDecimalGivenOnceWithNoSpaceOrSign) {
-  start(source(capture(12)));
+  start(looping_source(capture(12)));
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
   for (const char* q :
        {"/v1/depth?max_age_ms=%2B500", "/v1/depth?max_age_ms=%20500", "/v1/depth?max_age_ms=500%20",
@@ -178,7 +172,7 @@ TEST_F(NaneyedTest, QueryNumbersAreDecimalGivenOnceWithNoSpaceOrSign) {
 TEST_F(NaneyedTest, EventSlotsComeBackWhenClientsLeaveWhateverTheyAskedFor) {
   // Four clients asking for a result far in the future used to hold all four slots for good after
   // hanging up: every later /v1/events got 503 too_many_clients.
-  start("[pipeline]\nsse_max_clients = 4\n" + source(capture(12)));
+  start("[pipeline]\nsse_max_clients = 4\n" + looping_source(capture(12)));
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
   for (int round = 0; round < 2; ++round) {
     {

@@ -24,7 +24,7 @@ std::vector<std::array<double, 3>> ply_vertices(const std::string& body) {
 }
 
 // The value of an unlabelled sample line "name value" in /metrics; NaN when absent.
-double metric(const std::string& text, const std::string& name) {
+double metric_in_text(const std::string& text, const std::string& name) {
   std::istringstream in(text);
   std::string line;
   while (std::getline(in, line))
@@ -85,10 +85,11 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
   // /metrics and /v1/status give the same pair's figures.
   auto m = client->Get("/metrics");
   ASSERT_TRUE(m);
-  EXPECT_EQ(metric(m->body, "naneye_scene_valid_points"), valid);
-  EXPECT_EQ(metric(m->body, "naneye_scene_features"), static_cast<double>(sc["points"].size()));
-  EXPECT_EQ(metric(m->body, "naneye_scene_pairs_total"), 2);
-  EXPECT_NEAR(metric(m->body, "naneye_scene_noise_sigma_dn"), sc["noise_sigma_dn"].get<double>(), 1e-6);
+  EXPECT_EQ(metric_in_text(m->body, "naneye_scene_valid_points"), valid);
+  EXPECT_EQ(metric_in_text(m->body, "naneye_scene_features"), static_cast<double>(sc["points"].size()));
+  EXPECT_EQ(metric_in_text(m->body, "naneye_scene_pairs_total"), 2);
+  EXPECT_NEAR(metric_in_text(m->body, "naneye_scene_noise_sigma_dn"), sc["noise_sigma_dn"].get<double>(),
+              1e-6);
   const auto st = get_json("/v1/status");
   EXPECT_EQ(st["recon_mode"], "scene");
   EXPECT_EQ(st["scene"]["valid_points"], valid);
@@ -100,8 +101,8 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
                          "&v=" + std::to_string(p0["left_px"][1].get<double>());
   ASSERT_FALSE(sc["depth"].is_null()) << "scene mode computes the dense map";
   EXPECT_GT(sc["depth"]["valid_pixels"].get<int>(), 0);
-  EXPECT_NEAR(metric(m->body, "naneye_scene_depth_valid_share"), sc["depth"]["valid_share"].get<double>(),
-              1e-8);
+  EXPECT_NEAR(metric_in_text(m->body, "naneye_scene_depth_valid_share"),
+              sc["depth"]["valid_share"].get<double>(), 1e-8);
 
   // The 16-bit map: Z in 0.01 mm on the left raw grid, 0 = none; its count of non-zero pixels is the
   // result's valid_pixels, and /v1/depth/at reads the same map.
@@ -177,6 +178,6 @@ TEST_F(NaneyedTest, BoardModeHasNoSceneAndNoDepthMap) {
   EXPECT_TRUE(get_json("/v1/status")["scene"].is_null());
   auto m = client->Get("/metrics");
   ASSERT_TRUE(m);
-  EXPECT_TRUE(std::isnan(metric(m->body, "naneye_scene_valid_points")));  // absent, not 0
-  EXPECT_EQ(metric(m->body, "naneye_scene_pairs_total"), 0);
+  EXPECT_TRUE(std::isnan(metric_in_text(m->body, "naneye_scene_valid_points")));  // absent, not 0
+  EXPECT_EQ(metric_in_text(m->body, "naneye_scene_pairs_total"), 0);
 }

@@ -59,7 +59,7 @@ std::vector<std::uint8_t> capture(int records, int first_seq, std::uint32_t t0) 
   return ::testing::AssertionSuccess();
 }
 
-UsbSourceSettings settings_for(const UsbDeviceSpec& spec, int count, int size) {
+UsbSourceSettings source_settings_for(const UsbDeviceSpec& spec, int count, int size) {
   UsbSourceSettings s;
   s.transport.profile = builtin_usb_profiles().front();
   s.transport.profile.vid = spec.vid;
@@ -80,7 +80,7 @@ TEST(UsbSource, StreamsACaptureThroughTheRingBitExact) {
   UsbEmulator emu;
   UsbDeviceSpec spec;
   emu.plug(spec, capture(60, 0, 5000));
-  auto src = make_usb_source(settings_for(spec, 8, 128 * 1024));
+  auto src = make_usb_source(source_settings_for(spec, 8, 128 * 1024));
   src->start();
   for (int i = 0; i < 30; ++i) {
     PairPtr p = src->next(std::chrono::seconds(10));
@@ -114,7 +114,7 @@ TEST(UsbSource, UnplugMidRecordThenReplugReconnects) {
   UsbDeviceSpec spec;
   emu.plug(spec, capture(20, 0, 5000));
   emu.unplug_after(10 * kRecordSize + kRecordSize / 2);  // in the middle of record 10
-  auto src = make_usb_source(settings_for(spec, 8, 64 * 1024));
+  auto src = make_usb_source(source_settings_for(spec, 8, 64 * 1024));
   src->start();
   for (int i = 0; i < 5; ++i) ASSERT_TRUE(src->next(std::chrono::seconds(10))) << i;
   ASSERT_TRUE(emu.wait_unplugged(10000));
@@ -146,7 +146,7 @@ TEST(UsbSource, StopDiscardsTheTransfersInFlight) {
   UsbEmulator emu;
   UsbDeviceSpec spec;
   emu.plug(spec, capture(4, 0, 0));
-  auto src = make_usb_source(settings_for(spec, 5, 32 * 1024));
+  auto src = make_usb_source(source_settings_for(spec, 5, 32 * 1024));
   src->start();
   ASSERT_TRUE(src->next(std::chrono::seconds(10)));
   ASSERT_TRUE(src->next(std::chrono::seconds(10)));
@@ -192,7 +192,7 @@ TEST(UsbSource, TransferErrorCutsTheRecordAndResyncs) {
   // The 40th 16 KiB transfer starts inside record 5 (the right half of frame 2): it fails with a bus
   // error and 100 bytes are lost with it.
   emu.fail_transfer_at(39 * 16384, -EPROTO, 100);
-  auto src = make_usb_source(settings_for(spec, 4, 16384));
+  auto src = make_usb_source(source_settings_for(spec, 4, 16384));
   src->start();
   std::vector<int> left_seqs;
   for (int i = 0; i < 9; ++i) {

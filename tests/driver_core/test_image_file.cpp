@@ -8,7 +8,7 @@
 namespace naneye::driver {
 namespace {
 
-std::string error_of(const std::string& path, ImageSettings o = {}) {
+std::string image_error_of(const std::string& path, ImageSettings o = {}) {
   Image10 im;
   try {
     read_image(path, o, im);
@@ -57,7 +57,7 @@ TEST(ImageFile, EightAndSixteenBitFilesBecomeTenBitValues) {
   read_image(dir.image("raw10.png", raw10), ten, im);
   EXPECT_EQ(im.pixels, (std::vector<std::uint16_t>{0, 513, 1023}));
   // ... and a value it cannot hold is refused, not clipped.
-  EXPECT_NE(error_of(dir.image("g16b.png", g16), ten).find("above 1023"), std::string::npos);
+  EXPECT_NE(image_error_of(dir.image("g16b.png", g16), ten).find("above 1023"), std::string::npos);
 }
 
 TEST(ImageFile, FilesItCannotUseGiveAnErrorNamingTheFileAndWhy) {
@@ -73,7 +73,7 @@ TEST(ImageFile, FilesItCannotUseGiveAnErrorNamingTheFileAndWhy) {
                                   {empty, "empty file"},
                                   {dir.file("missing.png"), "cannot read"},
                                   {dir.str(), "cannot read"}}) {
-    const std::string e = error_of(path);
+    const std::string e = image_error_of(path);
     EXPECT_EQ(e.rfind(path + ": ", 0), 0u) << e;
     EXPECT_NE(e.find(why), std::string::npos) << e;
   }
@@ -81,10 +81,10 @@ TEST(ImageFile, FilesItCannotUseGiveAnErrorNamingTheFileAndWhy) {
   ImageSettings grbg;
   grbg.color = ColorMode::bayer_grbg;
   const cv::Mat colour(4, 4, CV_8UC3, cv::Scalar(10, 20, 30));
-  EXPECT_NE(error_of(dir.image("colour.png", colour), grbg).find("one channel"), std::string::npos);
+  EXPECT_NE(image_error_of(dir.image("colour.png", colour), grbg).find("one channel"), std::string::npos);
   // Floating-point images (TIFF can hold them) are not frames.
   const cv::Mat f32(4, 4, CV_32F, cv::Scalar(0.5));
-  EXPECT_NE(error_of(dir.image("float.tif", f32)).find("8- or 16-bit"), std::string::npos);
+  EXPECT_NE(image_error_of(dir.image("float.tif", f32)).find("8- or 16-bit"), std::string::npos);
 }
 
 }  // namespace

@@ -12,7 +12,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::vector<std::pair<Frame, Frame>> drain(FrameSource& s) {
+std::vector<std::pair<Frame, Frame>> drain_pairs(FrameSource& s) {
   std::vector<std::pair<Frame, Frame>> out;
   while (PairPtr p = s.next(2s)) out.emplace_back(p->left, p->right);
   return out;
@@ -35,7 +35,7 @@ TEST(ImageSource, AFolderGivesItsLeftAndRightFilesPairedInNameOrderAndSkipsABadP
   dir.image("left_3.png", test::ramp(30));  // no right partner
   auto s = make_default_registry().open("images://" + dir.str());
   s->start();
-  const auto pairs = drain(*s);
+  const auto pairs = drain_pairs(*s);
   ASSERT_EQ(pairs.size(), 2u);
   // Pair 0 is left_0/right_0, pair 1 is left_2/right_2 (left_1/right_1 skipped whole).
   EXPECT_EQ(pairs[0].first.at(0, 0), ten_bit(0));
@@ -78,7 +78,7 @@ TEST(ImageSource, ImagesOfAnotherSizeAreRefusedWithTheirSizeAndTheReplayFails) {
   ASSERT_TRUE(std::filesystem::exists(l)) << l << ": install opencv-doc (scripts/install-deps.sh)";
   auto s = make_default_registry().open("images://?left=" + l + "&right=" + r);
   s->start();
-  EXPECT_TRUE(drain(*s).empty());
+  EXPECT_TRUE(drain_pairs(*s).empty());
   EXPECT_EQ(s->state(), SourceState::failed);
   ASSERT_TRUE(s->error());
   EXPECT_NE(s->error()->find("640 x 480 pixels; a frame is 250 x 250"), std::string::npos) << *s->error();

@@ -14,11 +14,11 @@ namespace {
 using test::CollectingSink;
 using test::RecordSpec;
 
-struct Harness {
+struct ParserHarness {
   CollectingSink sink;
   AtomicCounters counters;
   StreamParser parser;
-  explicit Harness(const ParserSettings& s = {}) : parser(s, sink, counters) {}
+  explicit ParserHarness(const ParserSettings& s = {}) : parser(s, sink, counters) {}
   void feed(std::span<const std::uint8_t> b, std::size_t chunk) {
     for (std::size_t i = 0; i < b.size(); i += chunk)
       parser.feed(b.subspan(i, std::min(chunk, b.size() - i)), 7);
@@ -36,7 +36,7 @@ void expect_frames(const std::vector<Frame>& got, const std::vector<RecordSpec>&
 TEST(StreamParser, DeliversEveryRecordOfACleanStreamBitExact) {
   const auto recs = test::alternating(3);
   const auto bytes = test::build(recs);
-  Harness r;
+  ParserHarness r;
   r.feed(bytes, bytes.size());
   r.parser.finish(0);
   expect_frames(r.sink.frames, recs);
@@ -50,7 +50,7 @@ TEST(StreamParser, DeliversEveryRecordOfACleanStreamBitExact) {
 TEST(StreamParser, InSyncRecordIsDeliveredWithItsLastByte) {
   const auto recs = test::alternating(2);
   const auto bytes = test::build(recs);
-  Harness r;
+  ParserHarness r;
   r.feed(std::span(bytes).first(3 * kRecordSize - 1), 4096);
   EXPECT_EQ(r.sink.frames.size(), 2u);  // the third record misses one byte
   r.feed(std::span(bytes).subspan(3 * kRecordSize - 1, 1), 1);
@@ -61,7 +61,7 @@ TEST(StreamParser, InSyncRecordIsDeliveredWithItsLastByte) {
 TEST(StreamParser, StartsInTheMiddleOfARecord) {
   const auto recs = test::alternating(3);
   const auto bytes = test::build(recs);
-  Harness r;
+  ParserHarness r;
   r.feed(std::span(bytes).subspan(kRecordSize / 2 + 1), 10000);
   r.parser.finish(0);
   expect_frames(r.sink.frames, std::vector<RecordSpec>(recs.begin() + 1, recs.end()));
@@ -71,7 +71,7 @@ TEST(StreamParser, StartsInTheMiddleOfARecord) {
 TEST(StreamParser, OneByteChunksGiveTheSameFrames) {
   const auto recs = test::alternating(2);
   const auto bytes = test::build(recs);
-  Harness r;
+  ParserHarness r;
   r.feed(bytes, 1);
   r.parser.finish(0);
   expect_frames(r.sink.frames, recs);
@@ -82,7 +82,7 @@ TEST(StreamParser, SplitAtEveryPositionGivesTheSameFrames) {
   const auto recs = test::alternating(2);
   const auto bytes = test::build(recs, kSize);
   for (std::size_t cut = 0; cut <= bytes.size(); ++cut) {
-    Harness r(test::small_settings(kSize));
+    ParserHarness r(test::small_settings(kSize));
     r.parser.feed(std::span(bytes).first(cut), 0);
     r.parser.feed(std::span(bytes).subspan(cut), 0);
     r.parser.finish(0);
@@ -94,7 +94,7 @@ TEST(StreamParser, SplitAtEveryPositionGivesTheSameFrames) {
 
 TEST(StreamParser, SeqWrapIsNotAGap) {
   const auto recs = test::alternating(5, 250);  // 250 .. 255, 0 .. 3
-  Harness r;
+  ParserHarness r;
   r.feed(test::build(recs), 65536);
   expect_frames(r.sink.frames, recs);
   EXPECT_EQ(r.c().seq_gaps, 0u);
@@ -104,7 +104,7 @@ TEST(StreamParser, LostRecordsAreCountedWithoutLosingSync) {
   auto recs = test::alternating(5, 253);           // seq 253 .. 255, 0 .. 6
   recs.erase(recs.begin() + 3, recs.begin() + 6);  // 0, 1, 2 lost across the wrap
   recs.erase(recs.begin() + 4);                    // and 4
-  Harness r;
+  ParserHarness r;
   r.feed(test::build(recs), 16384);
   expect_frames(r.sink.frames, recs);
   EXPECT_EQ(r.c().seq_gaps, 4u);
@@ -115,7 +115,7 @@ TEST(StreamParser, TruncatedTailIsCutNotDelivered) {
   const auto recs = test::alternating(2);
   const auto bytes = test::build(recs);
   for (std::size_t keep : {std::size_t{3}, kHeaderSize, kRecordSize / 2, kRecordSize - 1}) {
-    Harness r;
+    ParserHarness r;
     r.feed(std::span(bytes).first(3 * kRecordSize + keep), 16384);
     r.parser.finish(0);
     expect_frames(r.sink.frames, std::vector<RecordSpec>(recs.begin(), recs.begin() + 3));
@@ -125,7 +125,7 @@ TEST(StreamParser, TruncatedTailIsCutNotDelivered) {
 
 TEST(StreamParser, LoneLastRecordIsConfirmedByItsReferencePixels) {
   auto bytes = test::build({{9, Sensor::right, 5}});
-  Harness r;
+  ParserHarness r;
   r.feed(bytes, 1000);
   EXPECT_TRUE(r.sink.frames.empty());  // no second header yet
   r.parser.finish(0);
@@ -135,7 +135,7 @@ TEST(StreamParser, LoneLastRecordIsConfirmedByItsReferencePixels) {
   bytes[kHeaderSize + 2] = 0xFF;  // row 0 px 1 (saturated) now 1023 -> still fine; break px 0 instead
   bytes[kHeaderSize + 0] = 0xFF;  // px 0 = 0x3FF: not black
   bytes[kHeaderSize + 1] = 0x03;
-  Harness bad;
+  ParserHarness bad;
   bad.feed(bytes, 1000);
   bad.parser.finish(0);
   EXPECT_TRUE(bad.sink.frames.empty());
@@ -147,7 +147,7 @@ TEST(StreamParser, ReferenceFailureIsCountedAndOptionallyRejected) {
   const std::size_t last_row = kHeaderSize + 2 * (249 * 250 + 247);  // record 1, row 249 px 247 (white)
   bytes[kRecordSize + last_row] = 10;
   bytes[kRecordSize + last_row + 1] = 0;
-  Harness keep;
+  ParserHarness keep;
   keep.feed(bytes, 50000);
   ASSERT_EQ(keep.sink.frames.size(), 4u);
   EXPECT_EQ(keep.sink.frames[1].reference, ReferenceStatus::failed);
@@ -156,12 +156,12 @@ TEST(StreamParser, ReferenceFailureIsCountedAndOptionallyRejected) {
 
   ParserSettings s;
   s.reference.reject = true;
-  Harness reject(s);
+  ParserHarness reject(s);
   reject.feed(bytes, 50000);
   EXPECT_EQ(reject.sink.frames.size(), 3u);
   EXPECT_EQ(reject.c().reference_failures, 1u);
   s.reference.white_min = 5;  // thresholds are settings
-  Harness lax(s);
+  ParserHarness lax(s);
   lax.feed(bytes, 50000);
   EXPECT_EQ(lax.sink.frames.size(), 4u);
 }
@@ -174,13 +174,13 @@ TEST(StreamParser, WithTheCheckOffAFrameSaysNotCheckedNeverPassed) {
   bytes[kRecordSize + kHeaderSize + 2 * (249 * 250 + 247) + 1] = 0;
   ParserSettings s;
   s.reference.enabled = false;
-  Harness off(s);
+  ParserHarness off(s);
   off.feed(bytes, 50000);
   ASSERT_EQ(off.sink.frames.size(), 4u);
   for (const auto& f : off.sink.frames) EXPECT_EQ(f.reference, ReferenceStatus::not_checked);
   EXPECT_EQ(off.c().reference_failures, 0u);
   EXPECT_EQ(off.c().reference_unchecked, 4u);
-  Harness on;
+  ParserHarness on;
   on.feed(bytes, 50000);
   EXPECT_EQ(on.c().reference_unchecked, 0u);
 }
@@ -191,7 +191,7 @@ TEST(StreamParser, OutOfRangePixelsDropTheRecordButNotPadding) {
   bytes[kRecordSize + kHeaderSize + 2 * 300 + 1] = 0x84;  // record 1, pixel 300: bit 15 set
   const std::size_t pad = 2 * (10 * 250 + 249) + 1;       // record 2, row 10 col 249: padding
   bytes[2 * kRecordSize + kHeaderSize + pad] = 0xF0;
-  Harness r;
+  ParserHarness r;
   r.feed(bytes, 50000);
   ASSERT_EQ(r.sink.frames.size(), 3u);
   EXPECT_EQ(r.sink.frames[1].seq, 2);
@@ -201,7 +201,7 @@ TEST(StreamParser, OutOfRangePixelsDropTheRecordButNotPadding) {
 
   ParserSettings s;
   s.reject_out_of_range = false;
-  Harness masked(s);
+  ParserHarness masked(s);
   masked.feed(bytes, 50000);
   ASSERT_EQ(masked.sink.frames.size(), 4u);
   EXPECT_LE(masked.sink.frames[1].pixels[300], kPixelMax);
@@ -211,7 +211,7 @@ TEST(StreamParser, OutOfRangePixelsDropTheRecordButNotPadding) {
 TEST(StreamParser, BayerFlagIsCarried) {
   ParserSettings s;
   s.color = ColorMode::bayer_grbg;
-  Harness r(s);
+  ParserHarness r(s);
   r.feed(test::build(test::alternating(1)), 1 << 20);
   ASSERT_EQ(r.sink.frames.size(), 2u);
   EXPECT_EQ(r.sink.frames[0].color, ColorMode::bayer_grbg);
@@ -222,7 +222,7 @@ TEST(StreamParser, MisplacedHeaderLosesSyncAndReacquires) {
   auto bytes = test::build(recs);
   bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(2 * kRecordSize + 1000),
               bytes.begin() + static_cast<std::ptrdiff_t>(2 * kRecordSize + 1010));
-  Harness r;
+  ParserHarness r;
   r.feed(bytes, 16384);
   EXPECT_EQ(r.c().sync_losses, 1u);
   // Record 2 lost bytes (dropped as corrupt or delivered damaged), record 3 is lost with the sync,
@@ -256,7 +256,7 @@ void corruption_trials(int size, int trials, std::uint32_t seed) {
       for (auto& b : junk) b = static_cast<std::uint8_t>(rng());
       bytes.insert(pos, junk.begin(), junk.end());
     }
-    Harness r(test::small_settings(size));
+    ParserHarness r(test::small_settings(size));
     r.feed(bytes, 1 + rng() % 3000);
     r.parser.finish(0);
     std::vector<bool> seen(recs.size(), false);
@@ -292,7 +292,7 @@ TEST(StreamParser, JunkBeforeTheFirstHeaderIsSkipped) {
   const auto recs = test::alternating(2);
   const auto good = test::build(recs);
   bytes.insert(bytes.end(), good.begin(), good.end());
-  Harness r;
+  ParserHarness r;
   r.feed(bytes, 777);
   r.parser.finish(0);
   expect_frames(r.sink.frames, recs);

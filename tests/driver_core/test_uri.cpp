@@ -10,7 +10,7 @@ namespace {
 
 // The SourceError message of `f()`, or "" if it did not throw.
 template <class F>
-std::string error_of(F f) {
+std::string source_error_of(F f) {
   try {
     f();
   } catch (const SourceError& e) {
@@ -34,15 +34,15 @@ TEST(SourceUri, UsbDefaultsAndParameters) {
 }
 
 TEST(SourceUri, UsbRefusalsNameTheParameter) {
-  auto e = error_of([] { parse_usb_uri(parse_uri("usb://10f8:c487?endpoint=0x06")); });
+  auto e = source_error_of([] { parse_usb_uri(parse_uri("usb://10f8:c487?endpoint=0x06")); });
   EXPECT_NE(e.find("'endpoint'"), std::string::npos) << e;
   EXPECT_NE(e.find("0x81..0x8f"), std::string::npos) << e;
-  e = error_of([] { parse_usb_uri(parse_uri("usb://10f8:c487?iface=1")); });
+  e = source_error_of([] { parse_usb_uri(parse_uri("usb://10f8:c487?iface=1")); });
   EXPECT_NE(e.find("unknown parameter 'iface'"), std::string::npos) << e;
   EXPECT_NE(e.find("serial, interface, endpoint"), std::string::npos) << e;
-  e = error_of([] { parse_usb_uri(parse_uri("usb://10f8")); });
+  e = source_error_of([] { parse_usb_uri(parse_uri("usb://10f8")); });
   EXPECT_NE(e.find("VID:PID"), std::string::npos) << e;
-  e = error_of([] { parse_usb_uri(parse_uri("usb://10f8:c487?interface=-1")); });
+  e = source_error_of([] { parse_usb_uri(parse_uri("usb://10f8:c487?interface=-1")); });
   EXPECT_NE(e.find("'interface'"), std::string::npos) << e;
 }
 
@@ -54,10 +54,10 @@ TEST(SourceUri, V4l2LayoutsAndFormats) {
   EXPECT_EQ(v.stream.parser.color, ColorMode::bayer_grbg);  // Bayer format implies Bayer frames
   EXPECT_EQ(parse_v4l2_uri(parse_uri("v4l2:///dev/video0?layout=alternate&format=Y10")).layout,
             V4l2Layout::alternate);
-  auto e = error_of([] { parse_v4l2_uri(parse_uri("v4l2:///dev/video0?layout=diagonal")); });
+  auto e = source_error_of([] { parse_v4l2_uri(parse_uri("v4l2:///dev/video0?layout=diagonal")); });
   EXPECT_NE(e.find("'layout'"), std::string::npos) << e;
   EXPECT_NE(e.find("side-by-side, top-bottom, alternate"), std::string::npos) << e;
-  e = error_of([] { parse_v4l2_uri(parse_uri("v4l2:///dev/video0?format=MJPG")); });
+  e = source_error_of([] { parse_v4l2_uri(parse_uri("v4l2:///dev/video0?format=MJPG")); });
   EXPECT_NE(e.find("Y10, Y16, GREY, SGRBG10"), std::string::npos) << e;
 }
 
@@ -77,14 +77,14 @@ TEST(SourceUri, FileSpeedsLoopAndPlainPaths) {
   EXPECT_EQ(f.stream.pairer.tolerance_ns, 8'000'000);
   EXPECT_EQ(f.stream.parser.color, ColorMode::bayer_grbg);
   EXPECT_TRUE(f.stream.parser.reference.reject);
-  auto e = error_of([] { parse_file_uri(parse_uri("file:///x.raw?speed=fast")); });
+  auto e = source_error_of([] { parse_file_uri(parse_uri("file:///x.raw?speed=fast")); });
   EXPECT_NE(e.find("'speed'"), std::string::npos) << e;
   EXPECT_NE(e.find("realtime, max"), std::string::npos) << e;
-  e = error_of([] { parse_file_uri(parse_uri("file:///x.raw?loop=2")); });
+  e = source_error_of([] { parse_file_uri(parse_uri("file:///x.raw?loop=2")); });
   EXPECT_NE(e.find("'loop'"), std::string::npos) << e;
-  e = error_of([] { parse_file_uri(parse_uri("file:///x.raw?speed=-1")); });
+  e = source_error_of([] { parse_file_uri(parse_uri("file:///x.raw?speed=-1")); });
   EXPECT_NE(e.find("'speed'"), std::string::npos) << e;
-  e = error_of([] { parse_file_uri(parse_uri("file:///x.raw?tolerance_ms=0")); });
+  e = source_error_of([] { parse_file_uri(parse_uri("file:///x.raw?tolerance_ms=0")); });
   EXPECT_NE(e.find("'tolerance_ms'"), std::string::npos) << e;
 }
 
@@ -96,18 +96,18 @@ TEST(SourceUri, GenericParsingForOtherSchemes) {
   EXPECT_EQ(*u.param("fps"), "50");
   EXPECT_EQ(*u.param("noise"), "0.5");
   EXPECT_FALSE(u.param("missing"));
-  EXPECT_NE(error_of([] { parse_uri("file:///x%4"); }).find("percent"), std::string::npos);
-  EXPECT_NE(error_of([] { parse_uri(""); }), "");
+  EXPECT_NE(source_error_of([] { parse_uri("file:///x%4"); }).find("percent"), std::string::npos);
+  EXPECT_NE(source_error_of([] { parse_uri(""); }), "");
 }
 
 TEST(SourceRegistry, OpensFilesAndRefusesUnknownSchemes) {
   SourceRegistry r = make_default_registry();
   EXPECT_TRUE(r.has("file"));
-  auto e = error_of([&] { r.open("ftp://host/x.raw"); });
+  auto e = source_error_of([&] { r.open("ftp://host/x.raw"); });
   EXPECT_NE(e.find("'ftp://'"), std::string::npos) << e;
   EXPECT_NE(e.find("file://"), std::string::npos) << e;
   // A known but unregistered scheme still gets its parameters checked first.
-  e = error_of([&] {
+  e = source_error_of([&] {
     SourceRegistry empty;
     empty.open("usb://10f8:c487?endpoint=zz");
   });

@@ -15,10 +15,6 @@ namespace {
 
 using namespace naneye::driver;
 
-void check(bool ok) {
-  if (!ok) std::abort();
-}
-
 // The pool outlives every input: building 12 full 250 x 250 pairs per input held the fuzzer at
 // ~200 exec/s. Each input gets a fresh parser, pairer and counters (cheap), and must hand every
 // buffer back (checked in finish()), so reusing the pool cannot carry state across inputs.
@@ -27,7 +23,7 @@ struct DropChannel : PairChannel {
   std::uint64_t delivered = 0;
   PairPtr acquire() override { return pool.try_acquire(); }
   void deliver(PairPtr p) override {
-    check(p->left.sensor == Sensor::left && p->right.sensor == Sensor::right);
+    fuzz_check(p->left.sensor == Sensor::left && p->right.sensor == Sensor::right);
     ++delivered;
   }
 };
@@ -50,10 +46,10 @@ struct Pipeline {
     parser.finish(0);
     pairer.flush();
     const SourceCounters c = counters.snapshot();
-    check(c.bytes == bytes);
-    check(c.records <= bytes / record_size);
-    check(2 * channel.delivered + c.unpaired == c.records);
-    check(channel.pool.available() == channel.pool.capacity());
+    fuzz_check(c.bytes == bytes);
+    fuzz_check(c.records <= bytes / record_size);
+    fuzz_check(2 * channel.delivered + c.unpaired == c.records);
+    fuzz_check(channel.pool.available() == channel.pool.capacity());
   }
 };
 
@@ -89,13 +85,13 @@ int read_neyd(const std::uint8_t* data, std::size_t size) {
     std::vector<std::uint8_t> chunk;
     std::int64_t t = 0;
     while (reader.next(chunk, t)) {
-      check(chunk.size() <= kNeydMaxChunk);
+      fuzz_check(chunk.size() <= kNeydMaxChunk);
       p.parser.feed(chunk, t);
       fed += chunk.size();
     }
   } catch (const NeydError& e) {
-    check(e.offset() <= size);
-    check(std::string(e.what()).find("byte offset") != std::string::npos || e.offset() == 0);
+    fuzz_check(e.offset() <= size);
+    fuzz_check(std::string(e.what()).find("byte offset") != std::string::npos || e.offset() == 0);
   }
   p.finish(fed, s.record_size());
   return 0;

@@ -4,9 +4,15 @@
 // broken invariant; an exception other than the parser's documented error escapes (a crash).
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <string_view>
 
 namespace naneye::fuzz {
+
+// An invariant of a parser's output: a broken one aborts, which libFuzzer reports as a crash.
+inline void fuzz_check(bool ok) {
+  if (!ok) std::abort();
+}
 
 using Entry = int (*)(const std::uint8_t* data, std::size_t size);
 

@@ -13,10 +13,6 @@ namespace {
 
 using namespace naneye::driver;
 
-void check(bool ok) {
-  if (!ok) std::abort();
-}
-
 // Largest buffer a configuration below can describe: side by side (500 px), 2 bytes a pixel, a
 // bytesperline up to 255 bytes beyond the minimum, 250 rows; top-bottom is 250 px by 500 rows.
 constexpr std::size_t kMaxBuffer = (2 * kSensorSize * 2 + 255) * 2 * kSensorSize;
@@ -43,7 +39,7 @@ int unpack_v4l2(const std::uint8_t* data, std::size_t size) {
   const std::size_t stride = static_cast<std::size_t>(width) * bytes_per_pixel(format) + data[1];
   const std::size_t image = stride * static_cast<std::size_t>(height);
   const std::size_t bytesused = image - std::min<std::size_t>(image, data[2] | data[3] << 8);
-  check(image <= kMaxBuffer);
+  fuzz_check(image <= kMaxBuffer);
   std::uint8_t* img = g_buffer + kMaxBuffer - image;
   std::memcpy(img, data + 4, std::min(size - 4, image));
   // v4l2_source.cpp's guard: a buffer shorter than the image is counted as cut, never unpacked.
@@ -52,7 +48,7 @@ int unpack_v4l2(const std::uint8_t* data, std::size_t size) {
   int x0 = 0, y0 = 0;
   v4l2_detail::eye_origin(layout, layout == V4l2Layout::alternate ? 0 : eye, x0, y0);
   v4l2_detail::unpack_eye(img, stride, format, x0, y0, frame);
-  for (const std::uint16_t v : frame.pixels) check(v <= kPixelMax);
+  for (const std::uint16_t v : frame.pixels) fuzz_check(v <= kPixelMax);
   return 0;
 }
 
@@ -65,12 +61,12 @@ int decode_image_file(const std::uint8_t* data, std::size_t size) {
   static Image10 image;  // its buffer is reused, as images:// does
   try {
     decode_image(std::span<const std::uint8_t>(data + 1, size - 1), o, image);
-    check(image.width > 0 && image.height > 0 &&
-          image.pixels.size() == static_cast<std::size_t>(image.width) * image.height);
-    check(static_cast<long long>(image.width) * image.height <= kMaxImagePixels);
-    for (const std::uint16_t v : image.pixels) check(v <= kPixelMax);
+    fuzz_check(image.width > 0 && image.height > 0 &&
+               image.pixels.size() == static_cast<std::size_t>(image.width) * image.height);
+    fuzz_check(static_cast<long long>(image.width) * image.height <= kMaxImagePixels);
+    for (const std::uint16_t v : image.pixels) fuzz_check(v <= kPixelMax);
   } catch (const ImageError& e) {
-    check(std::string(e.what()).starts_with("<memory>: "));
+    fuzz_check(std::string(e.what()).starts_with("<memory>: "));
   }
   return 0;
 }

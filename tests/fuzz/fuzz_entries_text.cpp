@@ -21,10 +21,6 @@
 namespace naneye::fuzz {
 namespace {
 
-void check(bool ok) {
-  if (!ok) std::abort();
-}
-
 std::string text_of(const std::uint8_t* data, std::size_t size) {
   return std::string(reinterpret_cast<const char*>(data), size);
 }
@@ -34,8 +30,8 @@ std::string text_of(const std::uint8_t* data, std::size_t size) {
 const std::string& memory_file(const std::uint8_t* data, std::size_t size) {
   static const int fd = memfd_create("naneye-fuzz-calib", 0);
   static const std::string path = "/proc/self/fd/" + std::to_string(fd);
-  check(fd >= 0 && ftruncate(fd, 0) == 0);
-  check(size == 0 || pwrite(fd, data, size, 0) == static_cast<ssize_t>(size));
+  fuzz_check(fd >= 0 && ftruncate(fd, 0) == 0);
+  fuzz_check(size == 0 || pwrite(fd, data, size, 0) == static_cast<ssize_t>(size));
   return path;
 }
 
@@ -46,9 +42,9 @@ int load_calibration(const std::uint8_t* data, std::size_t size) {
   try {
     const recon::StereoRig rig = recon::load_rig(std::filesystem::path(path));
     // A rig that loads must be usable: a finite baseline and image size.
-    check(std::isfinite(rig.baseline_mm()) && rig.left.width() > 0 && rig.left.height() > 0);
+    fuzz_check(std::isfinite(rig.baseline_mm()) && rig.left.width() > 0 && rig.left.height() > 0);
   } catch (const recon::CalibrationError& e) {
-    check(e.what()[0] != '\0');
+    fuzz_check(e.what()[0] != '\0');
   }
   return 0;
 }
@@ -56,9 +52,9 @@ int load_calibration(const std::uint8_t* data, std::size_t size) {
 int parse_daemon_toml(const std::uint8_t* data, std::size_t size) {
   try {
     const daemon::Settings s = daemon::parse_settings(text_of(data, size), "/nonexistent-fuzz-base");
-    check(s.http_port >= 0 && s.http_port <= 65535);
+    fuzz_check(s.http_port >= 0 && s.http_port <= 65535);
   } catch (const daemon::SettingsError& e) {
-    check(e.what()[0] != '\0');
+    fuzz_check(e.what()[0] != '\0');
   }
   return 0;
 }
@@ -67,7 +63,7 @@ int parse_device_profile(const std::uint8_t* data, std::size_t size) {
   try {
     driver::parse_usb_profile(text_of(data, size), "<fuzz>");
   } catch (const std::runtime_error& e) {  // the documented error of usb_profile.hpp
-    check(std::string(e.what()).starts_with("<fuzz>"));
+    fuzz_check(std::string(e.what()).starts_with("<fuzz>"));
   }
   return 0;
 }
@@ -76,7 +72,7 @@ int parse_source_uri(const std::uint8_t* data, std::size_t size) {
   const std::string text = text_of(data, size);
   try {
     const driver::SourceUri uri = driver::parse_uri(text);
-    check(!uri.scheme.empty());
+    fuzz_check(!uri.scheme.empty());
     // Every scheme's parser on every URI: each must refuse what is not its own with a SourceError.
     try {
       driver::parse_usb_uri(uri);
@@ -92,7 +88,7 @@ int parse_source_uri(const std::uint8_t* data, std::size_t size) {
     }
     try {
       const driver::ImagesUri im = driver::parse_images_uri(uri);
-      check(im.fps >= 0 && (im.dir.empty() != im.pairs.empty()));
+      fuzz_check(im.fps >= 0 && (im.dir.empty() != im.pairs.empty()));
     } catch (const driver::SourceError&) {
     }
   } catch (const driver::SourceError&) {
@@ -110,12 +106,12 @@ int parse_http_query(const std::uint8_t* data, std::size_t size) {
     if (!daemon::http::valid_utf8(key) || !daemon::http::valid_utf8(value)) return 0;
     if (key == "u" || key == "v") {
       const auto x = daemon::http::strict_double(value);
-      check(!x || std::isfinite(*x));
+      fuzz_check(!x || std::isfinite(*x));
       // Refused text has no decimal number in it: no space, no sign '+', no hex, nothing after.
-      if (x) check(value.find_first_of(" \txXpP") == std::string::npos && value[0] != '+');
+      if (x) fuzz_check(value.find_first_of(" \txXpP") == std::string::npos && value[0] != '+');
     } else if (key == "last_event_id") {
       const auto id = daemon::http::strict_int(value, 0, INT64_MAX);
-      check(!id || (*id >= 0 && std::to_string(*id).size() <= value.size()));
+      fuzz_check(!id || (*id >= 0 && std::to_string(*id).size() <= value.size()));
     }
   }
   return 0;

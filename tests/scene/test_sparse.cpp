@@ -15,7 +15,7 @@ struct SparseFigures {
 };
 
 // Outlier: relative depth error above 5 % (the bad-5 % line).
-SparseFigures evaluate(const std::string& name, bool bayer, recon::scene::SparseResult& res) {
+SparseFigures evaluate_sparse(const std::string& name, bool bayer, recon::scene::SparseResult& res) {
   const auto& rig = test::paper_d3();
   const auto& p = test::textured_pair(name, bayer);
   recon::scene::SparseReconstructor sr(rig);
@@ -60,7 +60,7 @@ class SparseScene : public ::testing::TestWithParam<std::tuple<std::string, bool
 TEST_P(SparseScene, AgainstTruth) {
   const auto& [name, bayer] = GetParam();
   recon::scene::SparseResult res;
-  const SparseFigures f = evaluate(name, bayer, res);
+  const SparseFigures f = evaluate_sparse(name, bayer, res);
   // No point where one eye cannot see the surface, none beyond a model's domain.
   EXPECT_EQ(f.unseen, 0);
   EXPECT_EQ(f.outside, 0);

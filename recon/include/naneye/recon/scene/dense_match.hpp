@@ -28,6 +28,9 @@ class StereoSGBM;
 
 namespace naneye::recon::scene {
 
+// What disparity() and sigma() hold where there is no match.
+inline constexpr float kNoMatch = std::numeric_limits<float>::quiet_NaN();
+
 struct MatcherSettings {
   int min_disparity = 0;     // px; smallest disparity searched
   int num_disparities = 48;  // px; band width (SGBM wants a multiple of 16)
