@@ -10,7 +10,6 @@
 // window. Var(c) = s^2 (A^-1)_cc with s^2 = SSR / (N - 3); delta = c / a, so sigma_d = sigma_c / a.
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "naneye/recon/scene/dense_match.hpp"
 

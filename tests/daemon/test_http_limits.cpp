@@ -12,8 +12,6 @@
 
 using namespace naneye::daemon::test;
 
-namespace {}  // namespace
-
 TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
   // Each connection held one of httplib's 8 pool threads while it sent its head a byte at a time:
   // 8 such clients stopped all service (/v1/status timed out at 15 s).

@@ -18,6 +18,7 @@
 //      view's disparities from the same aggregated cost must agree); not occluded (no nearer
 //      surface claims the same right pixel); every tap inside both eyes' valid masks.
 #include <array>
+#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
