@@ -55,11 +55,12 @@ writeFileSync(config, `[source]\nuri = "file://${capture}?speed=realtime&loop=1"
   `[http]\nhost = "127.0.0.1"\nport = ${port}\n`);
 
 let daemon = null;
-function startDaemon(cfg = config, at = origin) {
+// `probe` answers 200 once the daemon serves: /v1/status, or /healthz behind a token.
+function startDaemon(cfg = config, at = origin, probe = "/v1/status") {
   daemon = spawn(naneyed, ["--config", cfg], { stdio: ["ignore", "ignore", "pipe"] });
   daemon.stderr.on("data", () => {});
   return until("daemon up", async () => {
-    try { return (await fetch(`${at}/v1/status`)).ok; } catch { return false; }
+    try { return (await fetch(`${at}${probe}`)).ok; } catch { return false; }
   }, 15000);
 }
 async function stopDaemon() {
@@ -211,6 +212,50 @@ try {
   }
   check("no console errors on the scene", sceneErrors.length === 0, sceneErrors.join(" | "));
   check("no request leaves the daemon on the scene", sceneForeign.length === 0, sceneForeign.join(" "));
+  await stopDaemon();
+
+  // ---- with a token: the login form, a wrong token refused, the right one opens the viewer ----
+  // (docs/viewer.md, "With a token"). A fresh browser context: no cookie from the pages above.
+  const tokenPort = await freePort();
+  const tokenOrigin = `http://127.0.0.1:${tokenPort}`;
+  const token = "naneye-browser-test-" + Math.random().toString(16).slice(2).padEnd(16, "0");
+  const tokenFile = join(dir, "token");
+  writeFileSync(tokenFile, token + "\n", { mode: 0o600 });
+  const tokenConfig = join(dir, "token.toml");
+  writeFileSync(tokenConfig, `[source]\nuri = "file://${capture}?speed=realtime&loop=1"\n` +
+    `[calibration]\npath = "${join(root, "config/calib/paper-d3.yaml")}"\n` +
+    `[http]\nhost = "127.0.0.1"\nport = ${tokenPort}\ntoken_file = "${tokenFile}"\n`);
+  check("naneyed serves with a token file", await startDaemon(tokenConfig, tokenOrigin, "/healthz"));
+  const bare = await fetch(`${tokenOrigin}/v1/status`);
+  check("a request without the token is refused", bare.status === 401, `status ${bare.status}`);
+  const context = await browser.createBrowserContext();
+  const loginPage = await context.newPage();
+  const loginErrors = [];
+  loginPage.on("pageerror", (e) => loginErrors.push(String(e)));
+  const first = await loginPage.goto(`${tokenOrigin}/`, { waitUntil: "domcontentloaded" });
+  const form = await loginPage.$("form[action='/v1/session'] input[name=token][type=password]");
+  check("GET / without a session shows the token form", first.status() === 401 && form !== null, `status ${first.status()}`);
+  await loginPage.type("input[name=token]", "a-wrong-token-of-sixteen-chars");
+  const wrong = await Promise.all([loginPage.waitForNavigation({ waitUntil: "domcontentloaded" }), loginPage.click("button[type=submit]")]);
+  const noCookie = (await loginPage.cookies(tokenOrigin)).length === 0;
+  check("a wrong token gets no session", wrong[0].status() === 401 && noCookie, `status ${wrong[0].status()}`);
+  await loginPage.goto(`${tokenOrigin}/`, { waitUntil: "domcontentloaded" });
+  await loginPage.type("input[name=token]", token);
+  await Promise.all([loginPage.waitForNavigation({ waitUntil: "domcontentloaded" }), loginPage.click("button[type=submit]")]);
+  const cookies = await loginPage.cookies(tokenOrigin);
+  const session = cookies.find((c) => c.name === "naneye_session");
+  check("the right token sets an HttpOnly, SameSite=Strict session cookie and returns to the viewer",
+    session !== undefined && session.httpOnly && session.sameSite === "Strict" && new URL(loginPage.url()).pathname === "/",
+    session ? `cookie ${session.name}, httpOnly ${session.httpOnly}, sameSite ${session.sameSite}, at ${loginPage.url()}` : "no cookie");
+  const scriptSees = await loginPage.evaluate(() => document.cookie);
+  check("no script on the page can read the session", !scriptSees.includes("naneye_session"), JSON.stringify(scriptSees));
+  const lp = () => loginPage.$eval("#pair", (e) => e.textContent).catch(() => "");
+  const lp0 = await until("pair behind the token", async () => { const p = await lp(); return /^\d+$/.test(p) ? p : null; }, 10000);
+  const lp1 = await until("pair changes behind the token", async () => { const p = await lp(); return p !== lp0 ? p : null; }, 5000);
+  const lImg = await until("frame behind the token", () => loginPage.$eval("#img-left", (e) => e.complete && e.naturalWidth === 250), 5000);
+  check("behind the token the viewer streams (events, frames)", lp0 !== null && lp1 !== null && lImg !== null, `pair ${lp0} -> ${lp1}`);
+  check("no script error behind the token", loginErrors.length === 0, loginErrors.join(" | "));
+  await context.close();
 } catch (e) {
   check("the browser test ran to its end", false, e.stack || String(e));
 } finally {
