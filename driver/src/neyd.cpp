@@ -243,8 +243,23 @@ bool NeydReader::next(std::vector<std::uint8_t>& data, std::int64_t& host_ns) {
   const auto len = get_le<std::uint32_t>(h + 4);
   if (len > kNeydMaxChunk) fail("chunk length " + std::to_string(len) + " exceeds 64 MiB", at + 4);
   host_ns = get_le<std::int64_t>(h + 8);
-  data.resize(len);
-  const std::size_t payload = read(data.data(), len);
+  // A damaged length must not cost its claim in memory: past the capacity already held, the buffer
+  // grows with the bytes that arrive, kGrowStep at a time (a 100-byte file claiming 64 MiB would
+  // otherwise allocate 64 MiB before it is found truncated).
+  std::size_t payload = 0;
+  if (len <= data.capacity()) {
+    data.resize(len);
+    payload = read(data.data(), len);
+  } else {
+    constexpr std::size_t kGrowStep = 1u << 20;
+    while (payload < len) {
+      const std::size_t step = std::min<std::size_t>(len - payload, kGrowStep);
+      data.resize(payload + step);
+      const std::size_t got = read(data.data() + payload, step);
+      payload += got;
+      if (got < step) break;
+    }
+  }
   if (payload < len)
     fail("truncated chunk: " + std::to_string(payload) + " of " + std::to_string(len) +
              " payload bytes present",

@@ -120,6 +120,32 @@ TEST(Neyd, MissingEndMarkerIsReportedAsTruncation) {
   EXPECT_NE(error.find("without the end marker"), std::string::npos) << error;
 }
 
+TEST(Neyd, ADamagedLengthCostsWhatTheFileHoldsNotWhatItClaims) {
+  // The last chunk's length field says 60 MiB (under the 64 MiB limit, so it is read); the file
+  // holds 300 bytes of it. Refused as truncated, and the buffer grew with the bytes that arrived,
+  // not to the claim (before: 60 MiB allocated to find 300 bytes).
+  test::TempFile f("claim.neyd");
+  auto chunks = random_chunks(2, 5);
+  chunks[1].bytes.resize(300);
+  write_file(f.str(), chunks, false);
+  auto bytes = f.read();
+  const std::size_t at = 36 + 25 + 4 + 20 + chunks[0].bytes.size();
+  constexpr std::uint32_t kClaim = 60u << 20;
+  for (int i = 0; i < 4; ++i) bytes[at + 4 + i] = static_cast<std::uint8_t>(kClaim >> (8 * i));
+  f.write(bytes);
+  NeydReader r(f.str());
+  std::vector<std::uint8_t> data;
+  std::int64_t t = 0;
+  ASSERT_TRUE(r.next(data, t));
+  try {
+    r.next(data, t);
+    ADD_FAILURE() << "a chunk with 300 of 60 MiB present was accepted";
+  } catch (const NeydError& e) {
+    EXPECT_NE(std::string(e.what()).find("300 of 62914560 payload bytes"), std::string::npos) << e.what();
+  }
+  EXPECT_LE(data.capacity(), std::size_t{2} << 20);
+}
+
 TEST(Neyd, BadMagicAndBadHeaderAreRefused) {
   std::istringstream junk(std::string("RIFF0000WAVEfmt 0123456789012345678901234567890"));
   EXPECT_THROW(NeydReader r(junk), NeydError);

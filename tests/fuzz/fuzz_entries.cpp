@@ -82,7 +82,8 @@ int read_neyd(const std::uint8_t* data, std::size_t size) {
   std::size_t fed = 0;
   try {
     NeydReader reader(in);
-    std::vector<std::uint8_t> chunk;
+    // Kept across inputs, as a source keeps its own: the reader reuses its capacity.
+    static std::vector<std::uint8_t> chunk;
     std::int64_t t = 0;
     while (reader.next(chunk, t)) {
       fuzz_check(chunk.size() <= kNeydMaxChunk);
