@@ -20,6 +20,14 @@ constexpr std::size_t kMaxBuffer = (2 * kSensorSize * 2 + 255) * 2 * kSensorSize
 // the driver was told about is reading past the array.
 alignas(64) std::uint8_t g_buffer[kMaxBuffer];
 
+// Every bit set in any pixel: all pixels fit 10 bits iff this does. Outside libFuzzer's comparison
+// tracing (tests/fuzz/coverage_ignore.txt): per pixel it is no input's decision.
+std::uint16_t all_pixel_bits(const Frame& frame) {
+  std::uint16_t bits = 0;
+  for (const std::uint16_t v : frame.pixels) bits |= v;
+  return bits;
+}
+
 }  // namespace
 
 int unpack_v4l2(const std::uint8_t* data, std::size_t size) {
@@ -48,7 +56,7 @@ int unpack_v4l2(const std::uint8_t* data, std::size_t size) {
   int x0 = 0, y0 = 0;
   v4l2_detail::eye_origin(layout, layout == V4l2Layout::alternate ? 0 : eye, x0, y0);
   v4l2_detail::unpack_eye(img, stride, format, x0, y0, frame);
-  for (const std::uint16_t v : frame.pixels) fuzz_check(v <= kPixelMax);
+  fuzz_check(all_pixel_bits(frame) <= kPixelMax);
   return 0;
 }
 
