@@ -30,7 +30,10 @@ namespace naneye::driver {
 struct StreamSettings {
   ParserSettings parser;
   PairerSettings pairer;
-  std::size_t ring_capacity = 4;  // pairs waiting for the consumer
+  // Pairs waiting for the consumer: 8 is 129 ms at 62 fps. The worker's mean is well under a
+  // frame, but a pre-emption or a full search after a lost track can hold it for several frames
+  // (4 dropped pairs on a VM whose host took 26-48 % of the cores: docs/reliability.md, Attacks).
+  std::size_t ring_capacity = 8;
   std::size_t consumer_hold = 4;  // pairs the consumer may keep at once (pool size = ring + this + pairer)
 };
 
