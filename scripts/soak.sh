@@ -179,14 +179,21 @@ def load1():
     with open("/proc/loadavg") as f:
         return float(f.read().split()[0])
 
+def cpu_jiffies():
+    """(steal, total) jiffies of all cores: on a VM, steal is the time its host took the cores."""
+    with open("/proc/stat") as f:
+        v = [int(x) for x in f.readline().split()[1:]]
+    return v[7], sum(v[:8])
+
 samples = []  # (t_s, rss_kb, fds, processed, dropped)
 s0 = status(port)
 t_start = time.monotonic()
 csv = open(a.csv, "w") if a.csv else None
 if csv:
     csv.write("t_s,rss_kb,fds,pairs_processed,pairs_dropped\n")
-print(f"{'t_s':>6} {'rss_MB':>7} {'fds':>4} {'processed':>9} {'pairs/s':>7} {'dropped':>7} {'cpu_%':>5} {'load1':>5}", flush=True)
+print(f"{'t_s':>6} {'rss_MB':>7} {'fds':>4} {'processed':>9} {'pairs/s':>7} {'dropped':>7} {'cpu_%':>5} {'load1':>5} {'steal%':>6}", flush=True)
 cpu_prev, t_prev = cpu_s(), 0.0
+jiffies_prev = jiffies_start = cpu_jiffies()
 alive = True
 while time.monotonic() - t_start < a.minutes * 60:
     time.sleep(a.sample_s)
@@ -206,8 +213,11 @@ while time.monotonic() - t_start < a.minutes * 60:
     cpu_now = cpu_s()
     cpu_pct = 100 * (cpu_now - cpu_prev) / (t - t_prev)
     cpu_prev, t_prev = cpu_now, t
+    j = cpu_jiffies()
+    steal = 100 * (j[0] - jiffies_prev[0]) / max(1, j[1] - jiffies_prev[1])
+    jiffies_prev = j
     print(f"{t:6.0f} {samples[-1][1] / 1024:7.1f} {samples[-1][2]:4d} {proc:9d} {rate_now:7.1f} {drop:7d} "
-          f"{cpu_pct:5.1f} {load1():5.1f}", flush=True)
+          f"{cpu_pct:5.1f} {load1():5.1f} {steal:6.1f}", flush=True)
     if csv:
         csv.write(",".join(str(x) for x in samples[-1]) + "\n"); csv.flush()
 
@@ -237,7 +247,7 @@ if s0 and s1:
           f"{s1['pairs']['dropped'] - s0['pairs']['dropped']} (pipeline); "
           f"capture-to-publish p50/p99/max {s1['capture_to_publish_ms']['p50']:.2f}/"
           f"{s1['capture_to_publish_ms']['p99']:.2f}/{s1['capture_to_publish_ms']['max']:.2f} ms (last 2048 pairs)")
-print(f"events received {events_seen[0]}")
+print(f"events received {events_seen[0]}; the host took {100 * (jiffies_prev[0] - jiffies_start[0]) / max(1, jiffies_prev[1] - jiffies_start[1]):.1f} % of the cores (steal)")
 print(f"{'endpoint':<28} {'requests':>8} {'failed':>6} {'p50_ms':>7} {'p99_ms':>7} {'max_ms':>7}")
 for name in sorted(set(lat) | set(fails)):
     v = sorted(lat.get(name, []))
