@@ -115,7 +115,9 @@ TEST(FileSource, LiveReplayDropsTheOldestWhenTheConsumerIsAbsent) {
     std::this_thread::sleep_for(5ms);
   const Drained d = drain(*s);
   const SourceCounters c = s->counters();
-  EXPECT_EQ(d.pairs.size(), 4u);  // the ring's capacity: the newest four
+  const std::size_t ring = StreamSettings{}.ring_capacity;
+  ASSERT_LT(ring, 20u);
+  EXPECT_EQ(d.pairs.size(), ring);  // the ring's capacity: the newest pairs
   EXPECT_EQ(d.pairs.back().first.seq, 38);
   EXPECT_EQ(c.pairs_dropped + d.pairs.size(), 20u);
 }
@@ -142,13 +144,15 @@ TEST(FileSource, StopReleasesAProducerBlockedOnAFullRing) {
   test::TempFile f("blocked.raw");
   f.write(test::build(test::alternating(20)));
   auto s = open_started("file://" + f.str() + "?speed=max");
-  while (s->counters().pairs < 4) std::this_thread::sleep_for(1ms);  // ring full: the producer waits
+  const std::size_t ring = StreamSettings{}.ring_capacity;
+  ASSERT_LT(ring, 20u);
+  while (s->counters().pairs < ring) std::this_thread::sleep_for(1ms);  // ring full: the producer waits
   std::this_thread::sleep_for(20ms);
-  EXPECT_EQ(s->counters().pairs, 4u);
+  EXPECT_EQ(s->counters().pairs, ring);
   EXPECT_EQ(s->state(), SourceState::streaming);
   s->stop();
   EXPECT_EQ(s->state(), SourceState::stopped);
-  EXPECT_EQ(drain(*s).pairs.size(), 4u);  // what was handed over stays available
+  EXPECT_EQ(drain(*s).pairs.size(), ring);  // what was handed over stays available
   EXPECT_EQ(s->counters().pairs_dropped, 0u);
 }
 
