@@ -116,7 +116,8 @@ def run(name, attack):
     drops = s1["counters"]["pairs_dropped"] - s0["counters"]["pairs_dropped"] if s0 and s1 else None
     print(f"{name:<22} requests {len(lat):5d}  failed {fails:3d}  p50 {p(0.5):7.2f} ms  "
           f"p99 {p(0.99):7.2f} ms  max {lat[-1] if lat else float('nan'):7.2f} ms  "
-          f"pairs dropped {drops}  steal {steal:4.1f} %", flush=True)
+          f"pairs dropped {drops}  steal {steal:4.1f} %"
+          + (f"  anon RSS {rss_kb('RssAnon') / 1024:.1f} MB" if a.pid else ""), flush=True)
     return p(0.99), fails
 
 def slowloris(stop, n=500):
