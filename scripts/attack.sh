@@ -2,9 +2,10 @@
 # Hostile-client load against a running naneyed on loopback (issue 13), bounded in count and time:
 # slowloris, an idle-connection flood, oversize requests, event streams that never read, and a
 # SIGHUP storm. For each attack it prints the normal client's /v1/status latency (p50/p99/max over
-# sequential requests made during the attack), then pairs dropped, RSS before and after, and whether
-# the daemon lived; with each attack, the share of the cores the host took (steal: on a VM, what the
-# daemon could not have had). Target: alive, p99 <= 100 ms, 0 pairs dropped, RSS growth <= 5 MB.
+# sequential requests made during the attack), then pairs dropped, RSS before and after (all and
+# anonymous), and whether the daemon lived; with each attack, the share of the cores the host took
+# (steal: on a VM, what the daemon could not have had). Target: alive, p99 <= 100 ms, 0 pairs
+# dropped, anonymous RSS growth <= 5 MB.
 #
 #   scripts/attack.sh [--port 8080] [--pid PID] [--seconds 5] [--rounds 1] [--tls] [--token-file FILE]
 # --pid enables the RSS figures and the reload storm (the daemon's own pid; SIGHUP only).
@@ -81,6 +82,10 @@ def cpu_jiffies():
         v = [int(x) for x in f.readline().split()[1:]]
     return v[7], sum(v[:8])
 
+def steal_pct(j0, j1):
+    """The share of the cores' time between two cpu_jiffies() readings that was steal, %."""
+    return 100.0 * (j1[0] - j0[0]) / max(1, j1[1] - j0[1])
+
 def probe(stop):
     """Sequential /v1/status requests until stop is set: latencies in ms, failures counted."""
     lat, fails = [], 0
@@ -112,7 +117,7 @@ def run(name, attack):
     p = lambda q: lat[min(len(lat) - 1, int(q * len(lat)))] if lat else float("nan")
     s1 = status()
     j1 = cpu_jiffies()
-    steal = 100.0 * (j1[0] - j0[0]) / max(1, j1[1] - j0[1])
+    steal = steal_pct(j0, j1)
     drops = s1["counters"]["pairs_dropped"] - s0["counters"]["pairs_dropped"] if s0 and s1 else None
     print(f"{name:<22} requests {len(lat):5d}  failed {fails:3d}  p50 {p(0.5):7.2f} ms  "
           f"p99 {p(0.99):7.2f} ms  max {lat[-1] if lat else float('nan'):7.2f} ms  "
@@ -216,7 +221,7 @@ dropped = (after["counters"]["pairs_dropped"] - before["counters"]["pairs_droppe
 rss1, anon1 = rss_kb(), rss_kb("RssAnon")
 j1 = cpu_jiffies()
 print(f"pairs dropped {dropped}   processed {after['pairs']['processed'] - before['pairs']['processed'] if after else None}"
-      f"   steal {100.0 * (j1[0] - j0[0]) / max(1, j1[1] - j0[1]):.1f} % of the cores over the run")
+      f"   steal {steal_pct(j0, j1):.1f} % of the cores over the run")
 if rss0 is not None and rss1 is not None:
     print(f"RSS before {rss0 / 1024:.1f} MB  after {rss1 / 1024:.1f} MB  growth {(rss1 - rss0) / 1024:+.1f} MB; "
           f"anonymous {anon0 / 1024:.1f} -> {anon1 / 1024:.1f} MB, growth {(anon1 - anon0) / 1024:+.1f} MB")

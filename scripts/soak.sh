@@ -185,6 +185,10 @@ def cpu_jiffies():
         v = [int(x) for x in f.readline().split()[1:]]
     return v[7], sum(v[:8])
 
+def steal_pct(j0, j1):
+    """The share of the cores' time between two cpu_jiffies() readings that was steal, %."""
+    return 100.0 * (j1[0] - j0[0]) / max(1, j1[1] - j0[1])
+
 samples = []  # (t_s, rss_kb, fds, processed, dropped)
 s0 = status(port)
 t_start = time.monotonic()
@@ -214,7 +218,7 @@ while time.monotonic() - t_start < a.minutes * 60:
     cpu_pct = 100 * (cpu_now - cpu_prev) / (t - t_prev)
     cpu_prev, t_prev = cpu_now, t
     j = cpu_jiffies()
-    steal = 100 * (j[0] - jiffies_prev[0]) / max(1, j[1] - jiffies_prev[1])
+    steal = steal_pct(jiffies_prev, j)
     jiffies_prev = j
     print(f"{t:6.0f} {samples[-1][1] / 1024:7.1f} {samples[-1][2]:4d} {proc:9d} {rate_now:7.1f} {drop:7d} "
           f"{cpu_pct:5.1f} {load1():5.1f} {steal:6.1f}", flush=True)
@@ -247,7 +251,7 @@ if s0 and s1:
           f"{s1['pairs']['dropped'] - s0['pairs']['dropped']} (pipeline); "
           f"capture-to-publish p50/p99/max {s1['capture_to_publish_ms']['p50']:.2f}/"
           f"{s1['capture_to_publish_ms']['p99']:.2f}/{s1['capture_to_publish_ms']['max']:.2f} ms (last 2048 pairs)")
-print(f"events received {events_seen[0]}; the host took {100 * (jiffies_prev[0] - jiffies_start[0]) / max(1, jiffies_prev[1] - jiffies_start[1]):.1f} % of the cores (steal)")
+print(f"events received {events_seen[0]}; the host took {steal_pct(jiffies_start, jiffies_prev):.1f} % of the cores (steal)")
 print(f"{'endpoint':<28} {'requests':>8} {'failed':>6} {'p50_ms':>7} {'p99_ms':>7} {'max_ms':>7}")
 for name in sorted(set(lat) | set(fails)):
     v = sorted(lat.get(name, []))

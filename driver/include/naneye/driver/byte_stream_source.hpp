@@ -32,7 +32,8 @@ struct StreamSettings {
   PairerSettings pairer;
   // Pairs waiting for the consumer: 8 is 129 ms at 62 fps. The worker's mean is well under a
   // frame, but a pre-emption or a full search after a lost track can hold it for several frames
-  // (4 dropped pairs on a VM whose host took 26-48 % of the cores: docs/reliability.md, Attacks).
+  // (with 4, the bundled capture's attack runs dropped 49 and 87 pairs on a VM whose host took
+  // 26-48 % of the cores; with 8, 3: docs/reliability.md, "Attacks, 2026-12-03").
   std::size_t ring_capacity = 8;
   std::size_t consumer_hold = 4;  // pairs the consumer may keep at once (pool size = ring + this + pairer)
 };
