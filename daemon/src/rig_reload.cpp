@@ -45,7 +45,9 @@ void RigReload::apply_pending(std::unique_ptr<app::PairProcessor>& processor, st
   }
   try {
     if (prepared && prepared->name() == name) {
-      processor.swap(prepared);  // the previous one is freed when `prepared` goes
+      processor.swap(prepared);
+      std::lock_guard lock(mu_);
+      if (!retired_) retired_ = std::move(prepared);  // else it is freed here: a storm outran release
     } else {
       processor->set_rig(*next);
     }
@@ -68,6 +70,15 @@ void RigReload::apply_pending(std::unique_ptr<app::PairProcessor>& processor, st
     }
     refused(std::string("the processing step refused it: ") + e.what());
   }
+}
+
+bool RigReload::release_retired() {
+  std::unique_ptr<app::PairProcessor> old;
+  {
+    std::lock_guard lock(mu_);
+    old = std::move(retired_);
+  }
+  return old != nullptr;  // freed here, outside the lock the worker may want
 }
 
 void RigReload::fill(PipelineStatus& s) const {

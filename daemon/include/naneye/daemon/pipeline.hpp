@@ -50,6 +50,9 @@ class Pipeline {
   // Records a reload that was refused before reaching the pipeline (unreadable, or not valid for
   // the sensor: rig_check.hpp); the rig in use stays.
   void reload_refused(std::string reason);
+  // Frees, on the calling thread, the processor a reload replaced (the worker never frees one);
+  // true when there was one. The reloading thread calls it after its reload has been applied.
+  bool release_retired_processor() { return reload_.release_retired(); }
   std::shared_ptr<const recon::StereoRig> rig() const { return reload_.rig(); }
 
   const PinnedSlots<Published>& results() const { return publication_.results(); }

@@ -3,10 +3,12 @@
 // between two pairs. HTTP readers see the new rig at once (rig()); the worker swaps in a processor
 // already set to it on the caller's thread (building the new maps never delays a pair), or sets
 // its own. A reload that fails in the processing step gives the processor, and readers, the
-// previous rig back. Each outcome is kept for /v1/status (last, counts).
+// previous rig back. Each outcome is kept for /v1/status (last, counts). The processor a swap
+// replaces is not freed on the worker either: it waits for release_retired() on the caller's thread
+// (freeing its maps and pools, and giving the pages back, costs a pair's time).
 //
-// Threads: offer(), refused(), rig() and fill() from any thread; apply_pending() is the worker's and
-// takes the mutex only when a reload is pending.
+// Threads: offer(), refused(), rig(), release_retired() and fill() from any thread; apply_pending()
+// is the worker's and takes the mutex only when a reload is pending.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -35,6 +37,9 @@ class RigReload {
 
   // Worker, between two pairs: applies a pending reload to `processor` (whose name() is `name`).
   void apply_pending(std::unique_ptr<app::PairProcessor>& processor, std::string_view name);
+  // Frees the processor the last swap replaced, on the calling thread; true when there was one.
+  // Should the worker swap again before this runs, it frees that second one itself.
+  bool release_retired();
   // calibration_reloads, calibration_reload_failures, last_reload.
   void fill(PipelineStatus& s) const;
 
@@ -45,6 +50,7 @@ class RigReload {
   mutable std::mutex mu_;  // HTTP readers and reloads only; the worker takes it once per reload
   std::shared_ptr<const recon::StereoRig> rig_;
   std::unique_ptr<app::PairProcessor> prepared_;  // guarded by mu_: offer()'s, for the worker to take
+  std::unique_ptr<app::PairProcessor> retired_;   // guarded by mu_: the worker's last swapped-out one
   std::atomic<bool> pending_{false};
   std::shared_ptr<const recon::StereoRig> applied_;  // worker only: the rig the processor has
   mutable std::mutex outcome_mu_;                    // guards last_ (a reload's outcome, rare)
