@@ -13,6 +13,17 @@ namespace naneye::daemon::http {
 
 using Clock = std::chrono::steady_clock;
 
+namespace {
+
+// Bytes the client sent that this thread has not read yet (or, for TLS, not yet taken into the
+// handshake): such a connection is not idle, only not read yet, so the cap must not evict it.
+bool has_unread_bytes(int fd) {
+  char b;
+  return ::recv(fd, &b, 1, MSG_PEEK | MSG_DONTWAIT) > 0;
+}
+
+}  // namespace
+
 bool Gate::on_readable(Conn& c) {
   // A TLS handshake goes step by step here, under the head deadline that runs from the accept: a
   // client that stalls it is one more slow client, closed at its deadline or evicted for a newcomer
@@ -65,13 +76,16 @@ void Gate::poll_loop() {
       incoming_.clear();
     }
     // Over the cap (counting connections a worker holds: every one is a descriptor), the oldest
-    // connection that has sent nothing (an idle keep-alive one, or one that connected and stayed
-    // silent: an idle flood) makes room; when the newest is the only such one, or every other is
-    // in the middle of a request, the newest is refused.
+    // connection that has sent nothing, read or still in its socket (an idle keep-alive one, or one
+    // that connected and stayed silent: an idle flood), makes room; when the newest is the only such
+    // one, or every other is in the middle of a request, the newest is refused.
     while (open_.load() > cap_ && !conns_.empty()) {
       auto oldest = conns_.end();
       for (auto it = conns_.begin(); it != conns_.end(); ++it) {
-        if ((*it)->buf.empty() && (oldest == conns_.end() || (*it)->since < (*oldest)->since)) oldest = it;
+        if ((*it)->buf.empty() && (oldest == conns_.end() || (*it)->since < (*oldest)->since) &&
+            !has_unread_bytes((*it)->fd)) {
+          oldest = it;
+        }
       }
       if (oldest != conns_.end() && oldest + 1 != conns_.end()) {
         counters_.idle_evicted.fetch_add(1, std::memory_order_relaxed);
@@ -164,6 +178,12 @@ void Gate::poll_loop() {
         conns_.pop_back();
       }
     }
+    // Published once the reads above are judged: a connection counts from its first byte read to
+    // its dispatch (what the cap cannot evict: a slowloris shows here).
+    counters_.reading_heads.store(
+        static_cast<int>(
+            std::count_if(conns_.begin(), conns_.end(), [](const auto& c) { return !c->buf.empty(); })),
+        std::memory_order_relaxed);
     if (!done.empty()) {
       std::lock_guard lock(mu_);
       for (auto& c : done) {

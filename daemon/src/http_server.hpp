@@ -26,6 +26,7 @@ class TlsContext;
 // The connection gate's figures (daemon/src/http_gate.hpp), read by /v1/status and /metrics.
 struct HttpCounters {
   std::atomic<int> connections{0};              // client connections open now
+  std::atomic<int> reading_heads{0};            // of them, in the middle of a request head now
   int connection_cap = 0;                       // the most it keeps open (http.max_connections, fd limit)
   std::atomic<std::uint64_t> refused{0};        // answered 503 at the connection limit
   std::atomic<std::uint64_t> idle_evicted{0};   // idle keep-alive connections closed for a newcomer

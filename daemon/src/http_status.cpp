@@ -131,6 +131,7 @@ nlohmann::json status_json(const HttpContext& ctx, const PipelineStatus& s) {
           {"http",
            {{"connections", ctx.connections.connections.load()},
             {"connection_cap", ctx.connections.connection_cap},
+            {"reading_heads", ctx.connections.reading_heads.load()},
             {"refused", ctx.connections.refused.load()},
             {"idle_evicted", ctx.connections.idle_evicted.load()},
             {"head_timeouts", ctx.connections.head_timeouts.load()},

@@ -68,6 +68,8 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   const auto& h = ctx.connections;
   gauge(os, "naneye_http_connections", "Client connections open.", h.connections.load());
   gauge(os, "naneye_http_connection_cap", "Client connections kept open at most.", h.connection_cap);
+  gauge(os, "naneye_http_reading_heads", "Client connections in the middle of a request head.",
+        h.reading_heads.load());
   counter(os, "naneye_http_refused_total", "Connections answered 503 at the connection limit.",
           h.refused.load());
   counter(os, "naneye_http_idle_evicted_total", "Idle keep-alive connections closed to admit another.",
