@@ -1,7 +1,6 @@
 #include "calibration_yaml.hpp"
 
-#include <yaml-cpp/eventhandler.h>
-#include <yaml-cpp/yaml.h>
+#include <yaml-cpp/exceptions.h>
 
 #include <algorithm>
 #include <array>
@@ -10,10 +9,10 @@
 #include <fstream>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <string_view>
 
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "yaml_tree.hpp"
 
 namespace naneye::recon::detail {
 namespace {
@@ -33,9 +32,9 @@ constexpr std::string_view kDepthChars = "ucwsifdh";
   throw CalibrationError(file + ": " + problem);
 }
 
-[[noreturn]] void fail_key(const std::string& file, const std::string& key, const YAML::Node& at,
+[[noreturn]] void fail_key(const std::string& file, const std::string& key, const YamlNode& at,
                            const std::string& problem) {
-  const int line = at.Mark().line;  // -1 when yaml-cpp has no position
+  const int line = at.mark.line;  // -1 when yaml-cpp has no position
   throw CalibrationError(file + ": key '" + key + "': " + problem +
                          (line >= 0 ? " (line " + std::to_string(line + 1) + ")" : ""));
 }
@@ -48,9 +47,9 @@ std::string lower(std::string_view s) {
 
 // A plain (unquoted) scalar as FileStorage writes a number: decimal, `0.`, exponents, and its
 // `.Nan`, `.Inf`, `-.Inf`. Locale-independent (std::from_chars), the whole text or nothing.
-std::optional<double> number(const YAML::Node& n) {
-  if (!n.IsScalar() || n.Tag() != "?") return std::nullopt;  // "!" marks a quoted scalar: a string
-  std::string_view s = n.Scalar();
+std::optional<double> number(const YamlNode& n) {
+  if (!n.is_scalar() || n.tag != "?") return std::nullopt;  // "!" marks a quoted scalar: a string
+  std::string_view s = n.value;
   const std::string l = lower(s);
   if (l == ".nan") return std::numeric_limits<double>::quiet_NaN();
   if (l == ".inf" || l == "+.inf") return std::numeric_limits<double>::infinity();
@@ -76,58 +75,59 @@ double nearest_float(double v) {
   return static_cast<double>(static_cast<float>(v));
 }
 
-// The value of `name` in a map, at most once (yaml-cpp keeps a repeated key twice). Not Node's
-// operator[] (it throws on a scalar) nor its assignment (which re-points the node it assigns to).
-std::optional<YAML::Node> member(const std::string& file, const std::string& key, const YAML::Node& map,
-                                 const std::string& name) {
-  std::optional<YAML::Node> found;
-  for (const auto& kv : map) {
-    if (!kv.first.IsScalar() || kv.first.Scalar() != name) continue;
-    if (found) fail_key(file, key, kv.first, "'" + name + "' given twice");
-    found.emplace(kv.second);
+// The value of `name` in a map, at most once (the parser keeps a repeated key twice); null if absent.
+const YamlNode* member(const std::string& file, const std::string& key, const YamlNode& map,
+                       const std::string& name) {
+  const YamlNode* found = nullptr;
+  for (std::size_t i = 0; i + 1 < map.items.size(); i += 2) {
+    const YamlNode& k = *map.items[i];
+    if (!k.is_scalar() || k.value != name) continue;
+    if (found != nullptr) fail_key(file, key, k, "'" + name + "' given twice");
+    found = map.items[i + 1];
   }
   return found;
 }
 
-int dimension(const std::string& file, const std::string& key, const YAML::Node& map,
-              const std::string& name) {
+int dimension(const std::string& file, const std::string& key, const YamlNode& map, const std::string& name) {
   const auto n = member(file, key, map, name);
   if (!n) fail_key(file, key, map, "a matrix needs rows, cols, dt and data: no '" + name + "'");
   const auto v = number(*n);
   if (!v || *v != std::floor(*v) || *v < 1 || *v > static_cast<double>(std::numeric_limits<int>::max()))
-    fail_key(file, key, *n, "'" + name + "' must be a positive integer, not " + excerpt(n->Scalar()));
+    fail_key(file, key, *n, "'" + name + "' must be a positive integer, not " + excerpt(n->value));
   return static_cast<int>(*v);
 }
 
 // An `!!opencv-matrix`: what cv::read(FileNode, Mat) reads, single-channel (every matrix of a rig).
-cv::Mat matrix(const std::string& file, const std::string& key, const YAML::Node& map) {
-  if (map.Tag() != "?" && map.Tag() != kMatrixTag)
-    fail_key(file, key, map, "a map tagged " + excerpt(map.Tag()) + ": not an opencv-matrix");
+cv::Mat matrix(const std::string& file, const std::string& key, const YamlNode& map) {
+  if (map.tag != "?" && map.tag != kMatrixTag)
+    fail_key(file, key, map, "a map tagged " + excerpt(map.tag) + ": not an opencv-matrix");
   const int rows = dimension(file, key, map, "rows");
   const int cols = dimension(file, key, map, "cols");
-  const auto dt = member(file, key, map, "dt");
-  if (!dt) fail_key(file, key, map, "a matrix needs rows, cols, dt and data: no 'dt'");
-  const std::string type = dt->IsScalar() ? dt->Scalar() : "";
+  const YamlNode* dt = member(file, key, map, "dt");
+  if (dt == nullptr) fail_key(file, key, map, "a matrix needs rows, cols, dt and data: no 'dt'");
+  const std::string type = dt->is_scalar() ? dt->value : "";
   if (type.size() != 1 || kDepthChars.find(type[0]) == std::string_view::npos)
     fail_key(file, key, *dt,
              "dt " + excerpt(type) + " is not a single-channel OpenCV type (one of u c w s i f d h)");
   const bool integral = std::string_view("ucwsi").find(type[0]) != std::string_view::npos;
   const bool single = type[0] == 'f';
-  const auto data_node = member(file, key, map, "data");
-  if (!data_node || !data_node->IsSequence()) fail_key(file, key, map, "data is not a sequence of numbers");
-  const YAML::Node& data = *data_node;
-  const std::size_t given = data.size();
+  const YamlNode* data_node = member(file, key, map, "data");
+  if (data_node == nullptr || !data_node->is_sequence())
+    fail_key(file, key, map, "data is not a sequence of numbers");
+  const YamlNode& data = *data_node;
+  const std::size_t given = data.items.size();
   if (given != static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols))
     fail_key(file, key, data,
              "data has " + std::to_string(given) + " values but rows x cols is " + std::to_string(rows) +
                  "x" + std::to_string(cols));
   cv::Mat m(rows, cols, CV_64F);
   std::size_t i = 0;
-  for (const auto& e : data) {
+  for (const YamlNode* element : data.items) {
+    const YamlNode& e = *element;
     const auto v = number(e);
     if (!v)
       fail_key(file, key, e,
-               "data value " + std::to_string(i + 1) + " (" + excerpt(e.Scalar()) + ") is not a number");
+               "data value " + std::to_string(i + 1) + " (" + excerpt(e.value) + ") is not a number");
     if (integral && std::isfinite(*v) && *v != std::floor(*v))
       fail_key(file, key, e,
                "data value " + std::to_string(i + 1) + " is not an integer, as dt '" + type + "' says");
@@ -159,35 +159,6 @@ std::string read_text(const std::filesystem::path& path) {
   return text;
 }
 
-// Takes yaml-cpp's parse events and keeps none: counting documents without building them.
-class DiscardEvents final : public YAML::EventHandler {
- public:
-  void OnDocumentStart(const YAML::Mark&) override {}
-  void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
-  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
-                       YAML::EmitterStyle::value) override {}
-  void OnSequenceEnd() override {}
-  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
-  }
-  void OnMapEnd() override {}
-};
-
-// Whether the text holds more than one YAML document, asking the parser for two at most.
-// YAML::LoadAll asks until the parser says there are no more, and yaml-cpp 0.7's parser never says
-// so when a flow indicator (`,`, `]`, `}`) stands outside a flow collection: it reports an empty
-// document without consuming the token, so LoadAll looped, allocating a null node each time
-// (tests/fuzz/corpus/calib_yaml/hang_yamlcpp_loadall.yaml; upstream jbeder/yaml-cpp#1040, fixed
-// after 0.8 by #1319). Each HandleNextDocument call returns; only the loop around it did not end.
-bool more_than_one_document(const std::string& text) {
-  std::istringstream in(text);
-  YAML::Parser parser(in);
-  DiscardEvents discard;
-  return parser.HandleNextDocument(discard) && parser.HandleNextDocument(discard);
-}
-
 }  // namespace
 
 std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
@@ -204,33 +175,39 @@ std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
         "not an OpenCV FileStorage YAML file: the first line must be %YAML:1.0, as FileStorage writes it");
   text.erase(0, eol);
 
-  YAML::Node root;
+  // YAML::LoadAll asks until the parser says there are no more documents, and yaml-cpp 0.7's parser
+  // never says so when a flow indicator (`,`, `]`, `}`) stands outside a flow collection: it reports
+  // an empty document without consuming the token, so LoadAll looped, allocating a null node each
+  // time (tests/fuzz/corpus/calib_yaml/hang_yamlcpp_loadall.yaml; upstream jbeder/yaml-cpp#1040,
+  // fixed after 0.8 by #1319). Each HandleNextDocument call returns; the reader asks for two.
+  YamlDocument doc;
   try {
-    if (more_than_one_document(text))
-      fail_file(file, "holds more than one YAML document; a calibration is one");
-    root = YAML::Load(text);  // the first document only: one parser call
+    doc = parse_first_yaml_document(text);
   } catch (const YAML::Exception& e) {
     fail_file(file, (e.mark.line >= 0 ? "line " + std::to_string(e.mark.line + 1) + ": " : std::string()) +
                         "not valid YAML: " + e.msg);
   }
-  if (root.IsNull()) fail_file(file, "holds no keys");
-  if (!root.IsMap()) fail_file(file, "not a map of keys (the top level of a FileStorage file)");
+  if (doc.more_documents) fail_file(file, "holds more than one YAML document; a calibration is one");
+  if (doc.root == nullptr || doc.root->is_null()) fail_file(file, "holds no keys");
+  const YamlNode& root = *doc.root;
+  if (!root.is_map()) fail_file(file, "not a map of keys (the top level of a FileStorage file)");
 
   std::vector<YamlKey> keys;
-  for (const auto& kv : root) {
-    if (!kv.first.IsScalar() || kv.first.Scalar().empty())
-      fail_file(file, "line " + std::to_string(kv.first.Mark().line + 1) + ": a key that is not a name");
-    YamlKey k{kv.first.Scalar(), {}, {}};
-    const YAML::Node& v = kv.second;
-    if (v.IsMap() && member(file, k.key, v, "data")) {
+  for (std::size_t i = 0; i + 1 < root.items.size(); i += 2) {
+    const YamlNode& name = *root.items[i];
+    if (!name.is_scalar() || name.value.empty())
+      fail_file(file, "line " + std::to_string(name.mark.line + 1) + ": a key that is not a name");
+    YamlKey k{name.value, {}, {}};
+    const YamlNode& v = *root.items[i + 1];
+    if (v.is_map() && member(file, k.key, v, "data")) {
       k.value = matrix(file, k.key, v);
     } else if (const auto x = number(v)) {
       k.value = cv::Mat(1, 1, CV_64F, cv::Scalar(*x));
     } else {
-      k.skipped = v.IsMap()        ? "a map without data"
-                  : v.IsSequence() ? "a sequence"
-                  : v.IsNull()     ? "empty"
-                                   : "a string (" + excerpt(v.Scalar()) + ")";
+      k.skipped = v.is_map()        ? "a map without data"
+                  : v.is_sequence() ? "a sequence"
+                  : v.is_null()     ? "empty"
+                                    : "a string (" + excerpt(v.value) + ")";
     }
     keys.push_back(std::move(k));
   }

@@ -255,4 +255,9 @@ TEST_F(CalibFiles, AKeyWeNeedThatIsNotANumberIsNamedAsSuch) {
   // Numbers as FileStorage and people write them: a sign, an exponent, a trailing point.
   const auto rig = load_rig(variant("216.360, 0., 122.414", "+2.1636e+02, 0, 122.414"));
   EXPECT_DOUBLE_EQ(rig.left.fx(), 216.36);
+  // A YAML alias is the value its anchor names (a matrix or a number), as FileStorage reads it.
+  const auto aliased =
+      load_rig(variant("image_width: 250\nimage_height: 250", "image_width: &side 250\nimage_height: *side"));
+  EXPECT_EQ(aliased.left.height(), 250);
+  expect_refused(variant("image_height: 250", "image_height: *nowhere"), {"variant.yaml", "not valid YAML"});
 }
