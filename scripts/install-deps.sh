@@ -6,7 +6,7 @@ packages=(
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libcpp-httplib-dev libssl-dev libusb-1.0-0-dev libsystemd-dev libtomlplusplus-dev zlib1g-dev
   libreaderwriterqueue-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
-  libumockdev-dev umockdev curl file chromium libyaml-cpp-dev opencv-doc
+  libumockdev-dev umockdev curl file chromium libyaml-cpp-dev libyaml-dev opencv-doc
   libclang-rt-14-dev  # libFuzzer for scripts/fuzz.sh (clang itself does not pull it in)
 )
 # The viewer's browser test (tests/browser) drives Debian's chromium with puppeteer-core from npm;

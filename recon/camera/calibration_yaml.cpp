@@ -1,7 +1,5 @@
 #include "calibration_yaml.hpp"
 
-#include <yaml-cpp/exceptions.h>
-
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -18,11 +16,11 @@ namespace naneye::recon::detail {
 namespace {
 
 // A calibration is a few kB (config/calib/paper-d3.yaml: 2.3 kB, with sigmas and comments); 1 MiB
-// is far beyond any, and bounds the text, and so the nodes, that yaml-cpp builds for a file that is
+// is far beyond any, and bounds the text, and so the nodes, that the parser builds for a file that is
 // something else.
 constexpr std::size_t kMaxFileBytes = std::size_t{1} << 20;
 
-// yaml-cpp's tag for `!!opencv-matrix`, the only tagged value FileStorage writes for a cv::Mat.
+// The resolved tag of `!!opencv-matrix`, the only tagged value FileStorage writes for a cv::Mat.
 constexpr std::string_view kMatrixTag = "tag:yaml.org,2002:opencv-matrix";
 
 // OpenCV's single-channel element types, as FileStorage names them in `dt` (CV_8U ... CV_16F).
@@ -34,7 +32,7 @@ constexpr std::string_view kDepthChars = "ucwsifdh";
 
 [[noreturn]] void fail_key(const std::string& file, const std::string& key, const YamlNode& at,
                            const std::string& problem) {
-  const int line = at.mark.line;  // -1 when yaml-cpp has no position
+  const int line = at.line;  // -1 when the parser has no position
   throw CalibrationError(file + ": key '" + key + "': " + problem +
                          (line >= 0 ? " (line " + std::to_string(line + 1) + ")" : ""));
 }
@@ -165,8 +163,8 @@ std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
   const std::string file = path.string();
   std::string text = read_text(path);
   // FileStorage writes `%YAML:1.0` first and reads a file as YAML only when it begins with `%YAML`
-  // (version 1.x); yaml-cpp wants `%YAML 1.x`. The line is checked, then blanked, so that
-  // yaml-cpp's line numbers are still the file's.
+  // (version 1.x); YAML wants `%YAML 1.x`. The line is checked, then blanked, so that
+  // the parser's line numbers are still the file's.
   const std::size_t eol = std::min(text.find('\n'), text.size());
   const std::string_view first(text.data(), eol);
   if (!first.starts_with("%YAML:1.") && !first.starts_with("%YAML 1."))
@@ -175,17 +173,15 @@ std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
         "not an OpenCV FileStorage YAML file: the first line must be %YAML:1.0, as FileStorage writes it");
   text.erase(0, eol);
 
-  // YAML::LoadAll asks until the parser says there are no more documents, and yaml-cpp 0.7's parser
-  // never says so when a flow indicator (`,`, `]`, `}`) stands outside a flow collection: it reports
-  // an empty document without consuming the token, so LoadAll looped, allocating a null node each
-  // time (tests/fuzz/corpus/calib_yaml/hang_yamlcpp_loadall.yaml; upstream jbeder/yaml-cpp#1040,
-  // fixed after 0.8 by #1319). Each HandleNextDocument call returns; the reader asks for two.
+  // One document: the parser is asked whether a second one starts (yaml-cpp 0.7's LoadAll, asked
+  // for all of them, never returned on a `,` outside a flow collection: hang_yamlcpp_loadall.yaml,
+  // upstream jbeder/yaml-cpp#1040; kept in the corpus).
   YamlDocument doc;
   try {
     doc = parse_first_yaml_document(text);
-  } catch (const YAML::Exception& e) {
-    fail_file(file, (e.mark.line >= 0 ? "line " + std::to_string(e.mark.line + 1) + ": " : std::string()) +
-                        "not valid YAML: " + e.msg);
+  } catch (const YamlError& e) {
+    fail_file(file, (e.line() >= 0 ? "line " + std::to_string(e.line() + 1) + ": " : std::string()) +
+                        "not valid YAML: " + e.what());
   }
   if (doc.more_documents) fail_file(file, "holds more than one YAML document; a calibration is one");
   if (doc.root == nullptr || doc.root->is_null()) fail_file(file, "holds no keys");
@@ -196,7 +192,7 @@ std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
   for (std::size_t i = 0; i + 1 < root.items.size(); i += 2) {
     const YamlNode& name = *root.items[i];
     if (!name.is_scalar() || name.value.empty())
-      fail_file(file, "line " + std::to_string(name.mark.line + 1) + ": a key that is not a name");
+      fail_file(file, "line " + std::to_string(name.line + 1) + ": a key that is not a name");
     YamlKey k{name.value, {}, {}};
     const YamlNode& v = *root.items[i + 1];
     if (v.is_map() && member(file, k.key, v, "data")) {

@@ -1,6 +1,6 @@
 #pragma once
-// Reads one calibration file, the YAML that OpenCV's FileStorage writes, with yaml-cpp: OpenCV 4.6's
-// own reader looped forever on a 247-byte file the fuzzer wrote (docs/reliability.md), and a
+// Reads one calibration file, the YAML that OpenCV's FileStorage writes, with libyaml (yaml_tree.hpp):
+// OpenCV 4.6's own reader looped forever on a 247-byte file the fuzzer wrote (docs/reliability.md), and a
 // calibration is read again on every SIGHUP. Private to recon/camera (calibration_io.cpp).
 
 #include <filesystem>

@@ -1,13 +1,15 @@
 #pragma once
-// A YAML document as plain nodes, built in one pass of yaml-cpp's parser (its event API), for the
-// calibration reader (calibration_yaml.cpp). YAML::Load's nodes cost a second parse to refuse a
-// second document (yaml-cpp 0.7's LoadAll cannot be asked for two at most) and several shared
-// allocations per node; these are kept in one deque and never share ownership.
-// Private to recon/camera.
-
-#include <yaml-cpp/mark.h>
+// A YAML document as plain nodes, built in one pass of libyaml's event parser (Debian libyaml-dev,
+// the reference C implementation), for the calibration reader (calibration_yaml.cpp). Private to
+// recon/camera.
+//
+// Why libyaml and not yaml-cpp: yaml-cpp 0.7's LoadAll never returned on a `,` outside a flow
+// collection (upstream jbeder/yaml-cpp#1040), and its scanner took 330 us per fuzzed calibration
+// under ASan against libyaml's 64 us (the same 2 439 texts; 145 against 5.7 us without ASan), which
+// held fuzz_calib_yaml at ~1 300-3 000 exec/s.
 
 #include <deque>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -16,8 +18,8 @@ namespace naneye::recon::detail {
 struct YamlNode {
   enum class Kind { null, scalar, sequence, map };
   Kind kind = Kind::null;
-  YAML::Mark mark;    // where the node starts (line -1: unknown)
-  std::string tag;    // yaml-cpp's: "?" untagged (plain scalar), "!" a quoted scalar, else resolved
+  int line = -1;      // 0-based line where the node starts
+  std::string tag;    // "?" untagged (a plain scalar, or a collection), "!" a quoted scalar, else resolved
   std::string value;  // a scalar's text
   // A sequence's elements; a map's keys and values, alternating (a key given twice stays twice).
   // An alias is the node it names (shared, never copied: a node may be its own descendant).
@@ -39,13 +41,22 @@ struct YamlDocument {
   YamlDocument& operator=(const YamlDocument&) = delete;
 
   std::deque<YamlNode> nodes;      // owns every node; a deque keeps their addresses
-  const YamlNode* root = nullptr;  // null: no document (or an empty one)
-  bool more_documents = false;     // the text holds a second document after this one
+  const YamlNode* root = nullptr;  // null: no document
+  bool more_documents = false;     // a second document starts after this one
 };
 
-// The first document of `text` and whether another follows (asking the parser for two documents at
-// most: see calibration_yaml.cpp on yaml-cpp#1040). Throws YAML::Exception for invalid YAML in
-// either.
+// Text that is not YAML: what the parser says and where (line 0-based, -1 unknown).
+class YamlError : public std::runtime_error {
+ public:
+  YamlError(const std::string& problem, int line) : std::runtime_error(problem), line_(line) {}
+  int line() const { return line_; }
+
+ private:
+  int line_;
+};
+
+// The first document of `text` (no NUL in it) and whether another starts after it: the parser is
+// asked for the second document's start, never for its content. Throws YamlError.
 YamlDocument parse_first_yaml_document(const std::string& text);
 
 }  // namespace naneye::recon::detail

@@ -224,11 +224,13 @@ TEST_F(CalibFiles, TheFileMustBeFileStorageYaml) {
   // The file on which OpenCV 4.6's FileStorage::open looped forever (fuzz_calib_yaml).
   expect_refused(fs::path(NANEYE_SOURCE_DIR) / "tests/fuzz/corpus/calib_yaml/hang_filestorage_loop.yaml",
                  {"hang_filestorage_loop.yaml", "not valid YAML"});
-  // ... and the one on which yaml-cpp 0.7's LoadAll looped (a `,` outside a flow collection), and
-  // the smallest file of that shape.
+  // ... and the one on which yaml-cpp 0.7's LoadAll looped (a `,` outside a flow collection, which
+  // yaml-cpp took for endless empty documents), and the smallest file of that shape: not YAML.
   expect_refused(fs::path(NANEYE_SOURCE_DIR) / "tests/fuzz/corpus/calib_yaml/hang_yamlcpp_loadall.yaml",
-                 {"hang_yamlcpp_loadall.yaml", "more than one YAML document"});
-  expect_refused(write("comma.yaml", "%YAML:1.0\n---\n,\n"), {"comma.yaml", "more than one YAML document"});
+                 {"hang_yamlcpp_loadall.yaml", "line 1", "not valid YAML"});
+  expect_refused(write("comma.yaml", "%YAML:1.0\n---\n,\n"), {"comma.yaml", "line 3", "not valid YAML"});
+  // Not UTF-8 (a Latin-1 comment): the parser's own refusal, named.
+  expect_refused(write("latin1.yaml", text_ + "# 5.99 \xb5m\n"), {"latin1.yaml", "not valid YAML", "UTF-8"});
 }
 
 TEST_F(CalibFiles, AMatrixNeedsRowsColsASingleChannelTypeAndNumbers) {
