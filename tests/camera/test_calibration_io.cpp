@@ -254,6 +254,11 @@ TEST_F(CalibFiles, AKeyWeNeedThatIsNotANumberIsNamedAsSuch) {
   expect_refused(variant("image_width: 250", "image_width: \"250\""),
                  {"variant.yaml", "'image_width'", "a string ('250')", "not a number"});
   expect_refused(variant("image_width: 250", "image_width: [ 250 ]"), {"'image_width'", "a sequence"});
+  // YAML's nulls (nothing, ~, null) are empty; a quoted one is a string.
+  for (const char* null_value : {"", " ~", " null", " NULL"})
+    expect_refused(variant("image_width: 250", std::string("image_width:") + null_value),
+                   {"'image_width'", "empty"});
+  expect_refused(variant("image_width: 250", "image_width: \"~\""), {"'image_width'", "a string ('~')"});
   // Numbers as FileStorage and people write them: a sign, an exponent, a trailing point.
   const auto rig = load_rig(variant("216.360, 0., 122.414", "+2.1636e+02, 0, 122.414"));
   EXPECT_DOUBLE_EQ(rig.left.fx(), 216.36);
