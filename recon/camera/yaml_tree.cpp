@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 
 namespace naneye::recon::detail {
@@ -65,13 +66,10 @@ class TreeBuilder {
         // libyaml leaves aliases to the composer: an alias before (or without) its anchor is ours to
         // refuse. The latest node of that name counts (an anchor may be given again).
         const std::string name = text_of(e.data.alias.anchor);
-        for (auto it = anchors_.rbegin(); it != anchors_.rend(); ++it) {
-          if (it->first == name) {
-            add(it->second, nullptr);
-            return true;
-          }
-        }
-        throw YamlError("unknown anchor '" + name.substr(0, 40) + "'", line);
+        const auto it = anchors_.find(name);
+        if (it == anchors_.end()) throw YamlError("unknown anchor '" + name.substr(0, 40) + "'", line);
+        add(it->second, nullptr);
+        return true;
       }
       case YAML_DOCUMENT_END_EVENT:
         return false;
@@ -86,7 +84,7 @@ class TreeBuilder {
     return &doc_.nodes.emplace_back(YamlNode{kind, line, std::move(tag), std::move(value), {}});
   }
   void add(const YamlNode* n, const yaml_char_t* anchor) {
-    if (anchor) anchors_.emplace_back(text_of(anchor), n);
+    if (anchor) anchors_[text_of(anchor)] = n;
     if (open_.empty()) {
       if (doc_.root == nullptr) doc_.root = n;
     } else {
@@ -100,7 +98,8 @@ class TreeBuilder {
 
   YamlDocument& doc_;
   std::vector<YamlNode*> open_;  // the collections being filled, innermost last
-  std::vector<std::pair<std::string, const YamlNode*>> anchors_;
+  // By name, hashed: a file of many anchors and aliases must not cost their product.
+  std::unordered_map<std::string, const YamlNode*> anchors_;
 };
 
 }  // namespace
