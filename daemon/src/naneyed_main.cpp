@@ -64,7 +64,6 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, daemon::HttpServer& server
   for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&set, s);
   auto last_kick = std::chrono::steady_clock::now();
   std::uint64_t beat = pipeline.heartbeat(), processed = pipeline.pairs_processed();
-  bool reloaded = false;
   for (;;) {
     timespec ts{0, static_cast<long>(std::chrono::nanoseconds(tick).count())};
     const int sig = sigtimedwait(&set, nullptr, &ts);
@@ -96,16 +95,12 @@ void watchdog_and_signals(daemon::Pipeline& pipeline, daemon::HttpServer& server
       // stops neither the calibration's reload nor the other's.
       server.reload_access(pipeline.status().uptime_s);
       sd_notify(0, "READY=1");
-      reloaded = true;
     }
     // The processor a reload replaced is freed here, and the pages it and the reload's parsing
     // leave free go back to the system: glibc keeps freed memory in each thread's arena, so a
     // SIGHUP storm grew the anonymous RSS by 7.5 MB (TLS: 18 MB) before it levelled off
     // (docs/reliability.md, "Attacks").
-    if (pipeline.release_retired_processor() || reloaded) {
-      malloc_trim(0);
-      reloaded = false;
-    }
+    if (pipeline.release_retired_processor() || sig == SIGHUP) malloc_trim(0);
     const auto now = std::chrono::steady_clock::now();
     if (watchdog && now - last_kick >= kick_every) {
       const auto b = pipeline.heartbeat(), p = pipeline.pairs_processed();

@@ -113,24 +113,19 @@ YamlDocument parse_first_yaml_document(const std::string& text) {
 
   YamlDocument doc;
   TreeBuilder builder(doc);
-  bool in_first = false, first_done = false;
+  bool first_done = false;
   for (;;) {
     yaml_event_t event_state;
     if (!yaml_parser_parse(parser.get(), &event_state)) fail(*parser);
     const Event event(&event_state, yaml_event_delete);
     const yaml_event_type_t type = event->type;
     if (type == YAML_STREAM_END_EVENT) break;
-    if (type == YAML_DOCUMENT_START_EVENT) {
-      if (first_done) {
-        doc.more_documents = true;
-        break;
-      }
-      in_first = true;
+    if (type == YAML_DOCUMENT_START_EVENT && first_done) {
+      doc.more_documents = true;
+      break;
     }
-    if (in_first && !builder.take(*event)) {
-      in_first = false;
-      first_done = true;
-    }
+    // The stream's start and the document's go to the builder too, which passes over them.
+    if (!first_done && !builder.take(*event)) first_done = true;
   }
   return doc;
 }
