@@ -1,7 +1,9 @@
 #include "naneye/recon/camera/calibration_io.hpp"
 
 #include <Eigen/LU>
+#include <array>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -35,9 +37,9 @@ bool same(const cv::Mat& a, const cv::Mat& b) {
 
 class Keys {
  public:
-  void read(const std::filesystem::path& path) {
-    const std::string file = path.string();
-    for (detail::YamlKey& k : detail::read_calibration_yaml(path)) {
+  void read(const CalibrationText& t) {
+    const std::string& file = t.name;
+    for (detail::YamlKey& k : detail::read_calibration_yaml(file, t.text)) {
       if (k.value.empty()) {
         not_ours_.emplace(k.key, file + ": key '" + k.key + "': " + k.skipped);
         continue;
@@ -138,15 +140,40 @@ std::optional<Eigen::Matrix<double, Rows, Cols>> optional_sigma(const Keys& keys
   return m;
 }
 
+// The whole file, refused once it is past what read_calibration_yaml takes (a pipe has no size
+// to ask for, so it is read as it comes).
+std::string read_text(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw CalibrationError(file + ": file not found");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw CalibrationError(file + ": cannot be opened");
+  std::string text;
+  std::array<char, 16384> chunk;
+  while (in && text.size() <= detail::kMaxCalibrationBytes) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) throw CalibrationError(file + ": cannot be read");
+  return text;
+}
+
 }  // namespace
 
 StereoRig load_rig(const std::vector<std::filesystem::path>& files) {
-  if (files.empty()) throw CalibrationError("no calibration file given");
+  std::vector<CalibrationText> texts;
+  texts.reserve(files.size());
+  for (const auto& f : files) texts.push_back(CalibrationText{f.string(), read_text(f)});
+  return parse_rig(texts);
+}
+
+StereoRig parse_rig(const std::vector<CalibrationText>& texts) {
+  if (texts.empty()) throw CalibrationError("no calibration file given");
   Keys keys;
   std::string names;
-  for (const auto& f : files) {
-    keys.read(f);
-    names += (names.empty() ? "" : " + ") + f.string();
+  for (const auto& t : texts) {
+    keys.read(t);
+    names += (names.empty() ? "" : " + ") + t.name;
   }
   const int width = to_size(keys, "image_width", names);
   const int height = to_size(keys, "image_height", names);

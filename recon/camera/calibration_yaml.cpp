@@ -1,10 +1,9 @@
 #include "calibration_yaml.hpp"
 
 #include <algorithm>
-#include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <optional>
 #include <string_view>
@@ -14,11 +13,6 @@
 
 namespace naneye::recon::detail {
 namespace {
-
-// A calibration is a few kB (config/calib/paper-d3.yaml: 2.3 kB, with sigmas and comments); 1 MiB
-// is far beyond any, and bounds the text, and so the nodes, that the parser builds for a file that is
-// something else.
-constexpr std::size_t kMaxFileBytes = std::size_t{1} << 20;
 
 // The resolved tag of `!!opencv-matrix`, the only tagged value FileStorage writes for a cv::Mat.
 constexpr std::string_view kMatrixTag = "tag:yaml.org,2002:opencv-matrix";
@@ -37,10 +31,10 @@ constexpr std::string_view kDepthChars = "ucwsifdh";
                          (line >= 0 ? " (line " + std::to_string(line + 1) + ")" : ""));
 }
 
-std::string lower(std::string_view s) {
-  std::string out(s);
-  std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return std::tolower(c); });
-  return out;
+// ASCII only, as YAML's own names are; no copy (this runs for every number in a file).
+bool same_ignoring_case(std::string_view a, std::string_view b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                    [](unsigned char x, unsigned char y) { return std::tolower(x) == std::tolower(y); });
 }
 
 // A plain (unquoted) scalar as FileStorage writes a number: decimal, `0.`, exponents, and its
@@ -48,10 +42,10 @@ std::string lower(std::string_view s) {
 std::optional<double> number(const YamlNode& n) {
   if (!n.is_scalar() || n.tag != "?") return std::nullopt;  // "!" marks a quoted scalar: a string
   std::string_view s = n.value;
-  const std::string l = lower(s);
-  if (l == ".nan") return std::numeric_limits<double>::quiet_NaN();
-  if (l == ".inf" || l == "+.inf") return std::numeric_limits<double>::infinity();
-  if (l == "-.inf") return -std::numeric_limits<double>::infinity();
+  if (same_ignoring_case(s, ".nan")) return std::numeric_limits<double>::quiet_NaN();
+  if (same_ignoring_case(s, ".inf") || same_ignoring_case(s, "+.inf"))
+    return std::numeric_limits<double>::infinity();
+  if (same_ignoring_case(s, "-.inf")) return -std::numeric_limits<double>::infinity();
   if (s.size() > 1 && s[0] == '+' && s[1] != '-') s.remove_prefix(1);
   double v = 0;
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
@@ -60,9 +54,9 @@ std::optional<double> number(const YamlNode& n) {
 }
 
 // A piece of the file in a message: short, since a message is logged and shown in /v1/status.
-std::string excerpt(const std::string& s) {
+std::string excerpt(std::string_view s) {
   constexpr std::size_t kMaxChars = 40;  // enough to recognise a value, not a dump of the file
-  return "'" + (s.size() > kMaxChars ? s.substr(0, kMaxChars) + "..." : s) + "'";
+  return "'" + std::string(s.substr(0, kMaxChars)) + (s.size() > kMaxChars ? "..." : "") + "'";
 }
 
 // What OpenCV's reader stores for a float matrix's entry; beyond float's range (casting is
@@ -103,7 +97,7 @@ cv::Mat matrix(const std::string& file, const std::string& key, const YamlNode& 
   const int cols = dimension(file, key, map, "cols");
   const YamlNode* dt = member(file, key, map, "dt");
   if (dt == nullptr) fail_key(file, key, map, "a matrix needs rows, cols, dt and data: no 'dt'");
-  const std::string type = dt->is_scalar() ? dt->value : "";
+  const std::string type(dt->is_scalar() ? dt->value : "");
   if (type.size() != 1 || kDepthChars.find(type[0]) == std::string_view::npos)
     fail_key(file, key, *dt,
              "dt " + excerpt(type) + " is not a single-channel OpenCV type (one of u c w s i f d h)");
@@ -137,52 +131,32 @@ cv::Mat matrix(const std::string& file, const std::string& key, const YamlNode& 
   return m;
 }
 
-std::string read_text(const std::filesystem::path& path) {
-  const std::string file = path.string();
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) fail_file(file, "file not found");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail_file(file, "cannot be opened");
-  std::string text;
-  std::array<char, 16384> chunk;  // read as it comes: a pipe has no size to ask for
-  while (in) {
-    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
-    if (text.size() > kMaxFileBytes) fail_file(file, "larger than 1 MiB: not a calibration");
-  }
-  if (in.bad()) fail_file(file, "cannot be read");
-  // No text file holds a NUL; it ended OpenCV's reader in a loop (hang_nul_byte.yaml), and a
-  // calibration read by another program should not depend on what each makes of one.
-  if (text.find('\0') != std::string::npos) fail_file(file, "holds a NUL byte: not a YAML text file");
-  return text;
-}
-
 }  // namespace
 
-std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
-  const std::string file = path.string();
-  std::string text = read_text(path);
+std::vector<YamlKey> read_calibration_yaml(const std::string& file, std::string_view text) {
+  if (text.size() > kMaxCalibrationBytes) fail_file(file, "larger than 1 MiB: not a calibration");
+  // No text file holds a NUL; it ended OpenCV's reader in a loop (hang_nul_byte.yaml), and a
+  // calibration read by another program should not depend on what each makes of one.
+  if (text.find('\0') != std::string_view::npos) fail_file(file, "holds a NUL byte: not a YAML text file");
   // FileStorage writes `%YAML:1.0` first and reads a file as YAML only when it begins with `%YAML`
-  // (version 1.x); YAML wants `%YAML 1.x`. The line is checked, then blanked, so that
-  // the parser's line numbers are still the file's.
+  // (version 1.x); YAML wants `%YAML 1.x`. The line is checked, then left out up to its newline,
+  // so that the parser's line numbers are still the file's.
   const std::size_t eol = std::min(text.find('\n'), text.size());
-  const std::string_view first(text.data(), eol);
+  const std::string_view first = text.substr(0, eol);
   if (!first.starts_with("%YAML:1.") && !first.starts_with("%YAML 1."))
     fail_file(
         file,
         "not an OpenCV FileStorage YAML file: the first line must be %YAML:1.0, as FileStorage writes it");
-  text.erase(0, eol);
+  text.remove_prefix(eol);
 
   // One document: the parser is asked whether a second one starts (yaml-cpp 0.7's LoadAll, asked
   // for all of them, never returned on a `,` outside a flow collection: hang_yamlcpp_loadall.yaml,
   // upstream jbeder/yaml-cpp#1040; kept in the corpus).
-  YamlDocument doc;
-  try {
-    doc = parse_first_yaml_document(text);
-  } catch (const YamlError& e) {
-    fail_file(file, (e.line() >= 0 ? "line " + std::to_string(e.line() + 1) + ": " : std::string()) +
-                        "not valid YAML: " + e.what());
-  }
+  YamlParse parse = parse_first_yaml_document(text);
+  if (const auto& p = parse.problem)
+    fail_file(file, (p->line >= 0 ? "line " + std::to_string(p->line + 1) + ": " : std::string()) +
+                        "not valid YAML: " + p->what);
+  const YamlDocument& doc = parse.document;
   if (doc.more_documents) fail_file(file, "holds more than one YAML document; a calibration is one");
   if (doc.root == nullptr || doc.root->is_null()) fail_file(file, "holds no keys");
   const YamlNode& root = *doc.root;
@@ -193,7 +167,7 @@ std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path) {
     const YamlNode& name = *root.items[i];
     if (!name.is_scalar() || name.value.empty())
       fail_file(file, "line " + std::to_string(name.line + 1) + ": a key that is not a name");
-    YamlKey k{name.value, {}, {}};
+    YamlKey k{std::string(name.value), {}, {}};
     const YamlNode& v = *root.items[i + 1];
     if (v.is_map() && member(file, k.key, v, "data")) {
       k.value = matrix(file, k.key, v);

@@ -3,9 +3,10 @@
 // OpenCV 4.6's own reader looped forever on a 247-byte file the fuzzer wrote (docs/reliability.md), and a
 // calibration is read again on every SIGHUP. Private to recon/camera (calibration_io.cpp).
 
-#include <filesystem>
+#include <cstddef>
 #include <opencv2/core.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace naneye::recon::detail {
@@ -19,8 +20,13 @@ struct YamlKey {
   std::string skipped;
 };
 
-// Every top-level key in file order (a key given twice comes twice). Throws CalibrationError naming
-// the file (and the line, or the key) for a file that is not such a YAML.
-std::vector<YamlKey> read_calibration_yaml(const std::filesystem::path& path);
+// A calibration is a few kB (config/calib/paper-d3.yaml: 2.3 kB, with sigmas and comments); 1 MiB
+// is far beyond any, and bounds the text, and so the nodes, that the parser builds for a file that is
+// something else.
+constexpr std::size_t kMaxCalibrationBytes = std::size_t{1} << 20;
+
+// Every top-level key of `text` in its order (a key given twice comes twice). Throws CalibrationError
+// naming `file` (and the line, or the key) for a text that is not such a YAML.
+std::vector<YamlKey> read_calibration_yaml(const std::string& file, std::string_view text);
 
 }  // namespace naneye::recon::detail

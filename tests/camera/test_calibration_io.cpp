@@ -231,6 +231,32 @@ TEST_F(CalibFiles, TheFileMustBeFileStorageYaml) {
   expect_refused(write("comma.yaml", "%YAML:1.0\n---\n,\n"), {"comma.yaml", "line 3", "not valid YAML"});
   // Not UTF-8 (a Latin-1 comment): the parser's own refusal, named.
   expect_refused(write("latin1.yaml", text_ + "# 5.99 \xb5m\n"), {"latin1.yaml", "not valid YAML", "UTF-8"});
+  // A %TAG directive: libyaml copies its prefix into every tag that uses the handle, so a 1 MiB file
+  // of a 500 kB prefix and 60 000 short tagged nodes held the reader for minutes and gigabytes.
+  // FileStorage writes none; the reader refuses it at the document's start.
+  expect_refused(fs::path(NANEYE_SOURCE_DIR) / "tests/fuzz/corpus/calib_yaml/tag_directive.yaml",
+                 {"tag_directive.yaml", "line 2", "not valid YAML", "%TAG"});
+  std::string bomb = "%YAML:1.0\n%TAG !a! tag:" + std::string(500000, 'x') + "\n---\nimage_width:\n";
+  for (int i = 0; i < 60000; ++i) bomb += "- !a!y 1\n";
+  expect_refused(write("tag_bomb.yaml", bomb), {"tag_bomb.yaml", "%TAG"});
+}
+
+TEST_F(CalibFiles, ATextIsReadAsItsFileIs) {
+  // parse_rig takes what load_rig would read: the same rig, and errors under the name given.
+  const std::string& text = text_;  // kDefault's
+  const auto from_text = naneye::recon::parse_rig({{"paper", text}});
+  const auto from_file = load_rig(kDefault);
+  EXPECT_EQ(from_text.left.K(), from_file.left.K());
+  EXPECT_EQ(from_text.T, from_file.T);
+  try {
+    std::string renamed = text;
+    renamed.replace(renamed.find("image_width"), 11, "image_wide_");
+    naneye::recon::parse_rig({{"given.yaml", renamed}});
+    ADD_FAILURE() << "a text without its keys was read";
+  } catch (const naneye::recon::CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("given.yaml: key 'image_width': missing"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(CalibFiles, AMatrixNeedsRowsColsASingleChannelTypeAndNumbers) {

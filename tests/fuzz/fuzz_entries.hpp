@@ -20,7 +20,7 @@ using Entry = int (*)(const std::uint8_t* data, std::size_t size);
 int parse_stream(const std::uint8_t* data, std::size_t size);
 // data: a whole .neyd file; its chunks go through the parser (4 x 4 sensor records).
 int read_neyd(const std::uint8_t* data, std::size_t size);
-// data: a calibration file (the YAML OpenCV's FileStorage writes), read by recon::load_rig (yaml-cpp).
+// data: a calibration file (the YAML OpenCV's FileStorage writes), read by recon::parse_rig (libyaml).
 int load_calibration(const std::uint8_t* data, std::size_t size);
 // data: naneyed's TOML configuration (daemon::parse_settings).
 int parse_daemon_toml(const std::uint8_t* data, std::size_t size);

@@ -5,9 +5,6 @@
 #include "http_internal.hpp"  // Eigen before httplib (see the header)
 // clang-format on
 
-#include <sys/mman.h>
-#include <unistd.h>
-
 #include <cstdlib>
 #include <string>
 
@@ -25,24 +22,13 @@ std::string text_of(const std::uint8_t* data, std::size_t size) {
   return std::string(reinterpret_cast<const char*>(data), size);
 }
 
-// load_rig reads files by name: one memory-backed file, rewritten for each input, keeps the disk out
-// of the loop.
-const std::string& memory_file(const std::uint8_t* data, std::size_t size) {
-  static const int fd = memfd_create("naneye-fuzz-calib", 0);
-  static const std::string path = "/proc/self/fd/" + std::to_string(fd);
-  // Written over the previous input, then cut to this one's size: truncating to 0 first freed and
-  // re-allocated the file's pages for every input.
-  fuzz_check(fd >= 0 && (size == 0 || pwrite(fd, data, size, 0) == static_cast<ssize_t>(size)));
-  fuzz_check(ftruncate(fd, static_cast<off_t>(size)) == 0);
-  return path;
-}
-
 }  // namespace
 
 int load_calibration(const std::uint8_t* data, std::size_t size) {
-  const std::string& path = memory_file(data, size);
   try {
-    const recon::StereoRig rig = recon::load_rig(std::filesystem::path(path));
+    // The text as load_rig hands it over once it has read a file (the reading itself is the
+    // filesystem's: tests/camera/test_calibration_io.cpp covers what is ours of it).
+    const recon::StereoRig rig = recon::parse_rig({recon::CalibrationText{"<fuzz>", text_of(data, size)}});
     // A rig that loads must be usable: a finite baseline and image size.
     fuzz_check(std::isfinite(rig.baseline_mm()) && rig.left.width() > 0 && rig.left.height() > 0);
   } catch (const recon::CalibrationError& e) {

@@ -18,6 +18,16 @@ class CalibrationError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A calibration's text and the name its errors give it (the file it came from).
+struct CalibrationText {
+  std::string name;
+  std::string text;
+};
+
+// The rig that the texts hold together, as load_rig reads it from files (the same rules, the same
+// errors): the reader of what has already been read, from a file, a pipe or a fuzzer.
+StereoRig parse_rig(const std::vector<CalibrationText>& texts);
+
 // Reads a rig from one file holding every key, or from several files that together hold them
 // (for instance intrinsics.yml + extrinsics.yml). A key given twice with different values is refused.
 StereoRig load_rig(const std::vector<std::filesystem::path>& files);
