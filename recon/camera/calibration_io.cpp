@@ -21,8 +21,12 @@ struct Entry {
   std::string file;
 };
 
-[[noreturn]] void fail(const std::string& file, const std::string& key, const std::string& problem) {
-  throw CalibrationError(file + ": key '" + key + "': " + problem);
+using detail::Refusal;
+
+std::nullopt_t refuse(Refusal& r, const std::string& file, const std::string& key,
+                      const std::string& problem) {
+  r.message = file + ": key '" + key + "': " + problem;
+  return std::nullopt;
 }
 
 std::string shape_of(const cv::Mat& m) {
@@ -37,20 +41,27 @@ bool same(const cv::Mat& a, const cv::Mat& b) {
 
 class Keys {
  public:
-  void read(const CalibrationText& t) {
+  explicit Keys(Refusal& r) : r_(r) {}
+
+  bool read(const CalibrationText& t) {
     const std::string& file = t.name;
-    for (detail::YamlKey& k : detail::read_calibration_yaml(file, t.text)) {
+    auto keys = detail::read_calibration_yaml(file, t.text, r_);
+    if (!keys) return false;
+    for (detail::YamlKey& k : *keys) {
       if (k.value.empty()) {
         not_ours_.emplace(k.key, file + ": key '" + k.key + "': " + k.skipped);
         continue;
       }
       if (auto found = entries_.find(k.key); found != entries_.end()) {
-        if (!same(found->second.value, k.value))
-          fail(file, k.key, "given again with a different value (first in " + found->second.file + ")");
+        if (!same(found->second.value, k.value)) {
+          refuse(r_, file, k.key, "given again with a different value (first in " + found->second.file + ")");
+          return false;
+        }
         continue;
       }
       entries_[k.key] = Entry{std::move(k.value), file};
     }
+    return true;
   }
 
   const Entry* find(const std::string& key) const {
@@ -58,29 +69,38 @@ class Keys {
     return it == entries_.end() ? nullptr : &it->second;
   }
 
-  const Entry& require(const std::string& key, const std::string& files) const {
+  // The entry, or null with the refusal set.
+  const Entry* require(const std::string& key, const std::string& files) const {
     const Entry* e = find(key);
-    if (e) return *e;
+    if (e) return e;
     // Present but a string or a sequence: say so rather than "missing".
     if (auto it = not_ours_.find(key); it != not_ours_.end())
-      throw CalibrationError(it->second + ", which is not a number or an opencv-matrix");
-    fail(files, key, "missing");
+      r_.message = it->second + ", which is not a number or an opencv-matrix";
+    else
+      refuse(r_, files, key, "missing");
+    return nullptr;
   }
 
+  Refusal& refusal() const { return r_; }
+
  private:
+  Refusal& r_;
   std::map<std::string, Entry> entries_;
   // Keys whose values are not numbers or matrices (the first occurrence of each): what require()
   // says, naming the file and the key, when one of them is needed.
   std::map<std::string, std::string> not_ours_;
 };
 
-void require_finite(const Entry& e, const std::string& key) {
-  if (!cv::checkRange(e.value)) fail(e.file, key, "contains a non-finite value");
+bool finite(Refusal& r, const Entry& e, const std::string& key) {
+  if (cv::checkRange(e.value)) return true;
+  refuse(r, e.file, key, "contains a non-finite value");
+  return false;
 }
 
 template <int Rows, int Cols>
-Eigen::Matrix<double, Rows, Cols> to_eigen(const Entry& e, const std::string& key) {
-  require_finite(e, key);
+std::optional<Eigen::Matrix<double, Rows, Cols>> to_eigen(Refusal& r, const Entry& e,
+                                                          const std::string& key) {
+  if (!finite(r, e, key)) return std::nullopt;
   cv::Mat m = e.value;
   // Vectors may be written as rows or as columns.
   if ((Rows == 1 || Cols == 1) && m.total() == static_cast<std::size_t>(Rows * Cols) &&
@@ -90,54 +110,73 @@ Eigen::Matrix<double, Rows, Cols> to_eigen(const Entry& e, const std::string& ke
   if (m.rows != Rows || m.cols != Cols) {
     std::ostringstream want;
     want << Rows << "x" << Cols;
-    fail(e.file, key, "has shape " + shape_of(e.value) + ", expected " + want.str());
+    return refuse(r, e.file, key, "has shape " + shape_of(e.value) + ", expected " + want.str());
   }
   Eigen::Matrix<double, Rows, Cols> out;
   cv::cv2eigen(m, out);
   return out;
 }
 
-Distortion to_distortion(const Entry& e, const std::string& key) {
-  require_finite(e, key);
+std::optional<Distortion> to_distortion(Refusal& r, const Entry& e, const std::string& key) {
+  if (!finite(r, e, key)) return std::nullopt;
   const cv::Mat& m = e.value;
-  if (!(m.rows == 1 || m.cols == 1)) fail(e.file, key, "has shape " + shape_of(m) + ", expected 1x5");
+  if (!(m.rows == 1 || m.cols == 1))
+    return refuse(r, e.file, key, "has shape " + shape_of(m) + ", expected 1x5");
   const std::size_t n = m.total();
   if (n == 8 || n == 12 || n == 14)
-    fail(e.file, key,
-         std::to_string(n) + " coefficients: only the 4- or 5-coefficient plumb_bob model is supported");
+    return refuse(
+        r, e.file, key,
+        std::to_string(n) + " coefficients: only the 4- or 5-coefficient plumb_bob model is supported");
   if (n != 4 && n != 5)
-    fail(e.file, key, "has " + std::to_string(n) + " coefficients, expected 5 (k1 k2 p1 p2 k3)");
+    return refuse(r, e.file, key, "has " + std::to_string(n) + " coefficients, expected 5 (k1 k2 p1 p2 k3)");
   const double* v = m.ptr<double>();
   return Distortion{v[0], v[1], v[2], v[3], n == 5 ? v[4] : 0.0};
 }
 
-CameraModel to_camera(const Keys& keys, const std::string& mkey, const std::string& dkey,
-                      const std::string& files, int width, int height) {
-  const Entry& me = keys.require(mkey, files);
-  const Eigen::Matrix3d K = to_eigen<3, 3>(me, mkey);
-  if (!(K(0, 0) > 0.0) || !(K(1, 1) > 0.0)) fail(me.file, mkey, "focal lengths must be positive");
-  if (K(1, 0) != 0.0 || K(2, 0) != 0.0 || K(2, 1) != 0.0 || K(2, 2) != 1.0)
-    fail(me.file, mkey, "not a camera matrix: the last row must be [0 0 1] and K(1,0) must be 0");
-  const Distortion d = to_distortion(keys.require(dkey, files), dkey);
-  return CameraModel(K, d, width, height);
+std::optional<CameraModel> to_camera(const Keys& keys, const std::string& mkey, const std::string& dkey,
+                                     const std::string& files, int width, int height) {
+  Refusal& r = keys.refusal();
+  const Entry* me = keys.require(mkey, files);
+  if (!me) return std::nullopt;
+  const auto K = to_eigen<3, 3>(r, *me, mkey);
+  if (!K) return std::nullopt;
+  if (!((*K)(0, 0) > 0.0) || !((*K)(1, 1) > 0.0))
+    return refuse(r, me->file, mkey, "focal lengths must be positive");
+  if ((*K)(1, 0) != 0.0 || (*K)(2, 0) != 0.0 || (*K)(2, 1) != 0.0 || (*K)(2, 2) != 1.0)
+    return refuse(r, me->file, mkey,
+                  "not a camera matrix: the last row must be [0 0 1] and K(1,0) must be 0");
+  const Entry* de = keys.require(dkey, files);
+  if (!de) return std::nullopt;
+  const auto d = to_distortion(r, *de, dkey);
+  if (!d) return std::nullopt;
+  return CameraModel(*K, *d, width, height);
 }
 
-int to_size(const Keys& keys, const std::string& key, const std::string& files) {
-  const Entry& e = keys.require(key, files);
-  require_finite(e, key);
-  if (e.value.total() != 1) fail(e.file, key, "must be a single integer");
-  const double v = e.value.at<double>(0);
-  if (v != std::floor(v) || v < 1 || v > 100000) fail(e.file, key, "must be a positive integer");
+std::optional<int> to_size(const Keys& keys, const std::string& key, const std::string& files) {
+  Refusal& r = keys.refusal();
+  const Entry* e = keys.require(key, files);
+  if (!e || !finite(r, *e, key)) return std::nullopt;
+  if (e->value.total() != 1) return refuse(r, e->file, key, "must be a single integer");
+  const double v = e->value.at<double>(0);
+  if (v != std::floor(v) || v < 1 || v > 100000) return refuse(r, e->file, key, "must be a positive integer");
   return static_cast<int>(v);
 }
 
+// An optional sigma: false (refused) if given but unusable; `out` stays empty if not given.
 template <int Rows, int Cols>
-std::optional<Eigen::Matrix<double, Rows, Cols>> optional_sigma(const Keys& keys, const std::string& key) {
+bool optional_sigma(const Keys& keys, const std::string& key,
+                    std::optional<Eigen::Matrix<double, Rows, Cols>>& out) {
   const Entry* e = keys.find(key);
-  if (!e) return std::nullopt;
-  auto m = to_eigen<Rows, Cols>(*e, key);
-  if ((m.array() < 0.0).any()) fail(e->file, key, "a standard deviation cannot be negative");
-  return m;
+  if (!e) return true;
+  Refusal& r = keys.refusal();
+  auto m = to_eigen<Rows, Cols>(r, *e, key);
+  if (!m) return false;
+  if ((m->array() < 0.0).any()) {
+    refuse(r, e->file, key, "a standard deviation cannot be negative");
+    return false;
+  }
+  out = *m;
+  return true;
 }
 
 // The whole file, refused once it is past what read_calibration_yaml takes (a pipe has no size
@@ -167,39 +206,71 @@ StereoRig load_rig(const std::vector<std::filesystem::path>& files) {
   return parse_rig(texts);
 }
 
-StereoRig parse_rig(const std::vector<CalibrationText>& texts) {
-  if (texts.empty()) throw CalibrationError("no calibration file given");
-  Keys keys;
+RigOrRefusal try_parse_rig(const std::vector<CalibrationText>& texts) {
+  RigOrRefusal out;
+  if (texts.empty()) {
+    out.refusal = "no calibration file given";
+    return out;
+  }
+  Refusal r;
+  const auto refused = [&] {
+    out.refusal = std::move(r.message);
+    return std::move(out);
+  };
+  Keys keys(r);
   std::string names;
   for (const auto& t : texts) {
-    keys.read(t);
+    if (!keys.read(t)) return refused();
     names += (names.empty() ? "" : " + ") + t.name;
   }
-  const int width = to_size(keys, "image_width", names);
-  const int height = to_size(keys, "image_height", names);
+  const auto width = to_size(keys, "image_width", names);
+  if (!width) return refused();
+  const auto height = to_size(keys, "image_height", names);
+  if (!height) return refused();
 
   StereoRig rig;
-  rig.left = to_camera(keys, "M1", "D1", names, width, height);
-  rig.right = to_camera(keys, "M2", "D2", names, width, height);
+  auto left = to_camera(keys, "M1", "D1", names, *width, *height);
+  if (!left) return refused();
+  auto right = to_camera(keys, "M2", "D2", names, *width, *height);
+  if (!right) return refused();
+  rig.left = std::move(*left);
+  rig.right = std::move(*right);
 
-  const Entry& re = keys.require("R", names);
-  rig.R = to_eigen<3, 3>(re, "R");
+  const Entry* re = keys.require("R", names);
+  if (!re) return refused();
+  const auto R = to_eigen<3, 3>(r, *re, "R");
+  if (!R) return refused();
+  rig.R = *R;
   const double ortho = (rig.R.transpose() * rig.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (ortho > 1e-6 || rig.R.determinant() < 0.0) {
     std::ostringstream s;
     s << "not a rotation (|R^T R - I| = " << ortho << ", det = " << rig.R.determinant() << ")";
-    fail(re.file, "R", s.str());
+    refuse(r, re->file, "R", s.str());
+    return refused();
   }
-  rig.T = to_eigen<3, 1>(keys.require("T", names), "T");
-  if (rig.T.norm() == 0.0) fail(keys.require("T", names).file, "T", "zero baseline");
+  const Entry* te = keys.require("T", names);
+  if (!te) return refused();
+  const auto T = to_eigen<3, 1>(r, *te, "T");
+  if (!T) return refused();
+  rig.T = *T;
+  if (rig.T.norm() == 0.0) {
+    refuse(r, te->file, "T", "zero baseline");
+    return refused();
+  }
 
-  rig.sigmas.M1 = optional_sigma<3, 3>(keys, "M1_sigma");
-  rig.sigmas.M2 = optional_sigma<3, 3>(keys, "M2_sigma");
-  rig.sigmas.D1 = optional_sigma<5, 1>(keys, "D1_sigma");
-  rig.sigmas.D2 = optional_sigma<5, 1>(keys, "D2_sigma");
-  rig.sigmas.om = optional_sigma<3, 1>(keys, "om_sigma");
-  rig.sigmas.T = optional_sigma<3, 1>(keys, "T_sigma");
-  return rig;
+  auto& s = rig.sigmas;
+  if (!optional_sigma<3, 3>(keys, "M1_sigma", s.M1) || !optional_sigma<3, 3>(keys, "M2_sigma", s.M2) ||
+      !optional_sigma<5, 1>(keys, "D1_sigma", s.D1) || !optional_sigma<5, 1>(keys, "D2_sigma", s.D2) ||
+      !optional_sigma<3, 1>(keys, "om_sigma", s.om) || !optional_sigma<3, 1>(keys, "T_sigma", s.T))
+    return refused();
+  out.rig = std::move(rig);
+  return out;
+}
+
+StereoRig parse_rig(const std::vector<CalibrationText>& texts) {
+  RigOrRefusal r = try_parse_rig(texts);
+  if (!r.rig) throw CalibrationError(r.refusal);
+  return std::move(*r.rig);
 }
 
 void save_rig(const StereoRig& rig, const std::filesystem::path& file) {

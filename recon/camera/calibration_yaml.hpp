@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,8 +26,16 @@ struct YamlKey {
 // something else.
 constexpr std::size_t kMaxCalibrationBytes = std::size_t{1} << 20;
 
-// Every top-level key of `text` in its order (a key given twice comes twice). Throws CalibrationError
-// naming `file` (and the line, or the key) for a text that is not such a YAML.
-std::vector<YamlKey> read_calibration_yaml(const std::string& file, std::string_view text);
+// Why a text was refused: one message naming the file (and the line, or the key), what
+// CalibrationError::what() says. Returned, not thrown: most texts a fuzzer or a careless reload
+// gives are refused, and a throw costs 10-20 us (docs/reliability.md, "Fifth run").
+struct Refusal {
+  std::string message;
+};
+
+// Every top-level key of `text` in its order (a key given twice comes twice), or nullopt with `r`
+// saying why for a text that is not such a YAML.
+std::optional<std::vector<YamlKey>> read_calibration_yaml(const std::string& file, std::string_view text,
+                                                          Refusal& r);
 
 }  // namespace naneye::recon::detail

@@ -248,12 +248,16 @@ TEST_F(CalibFiles, ATextIsReadAsItsFileIs) {
   const auto from_file = load_rig(kDefault);
   EXPECT_EQ(from_text.left.K(), from_file.left.K());
   EXPECT_EQ(from_text.T, from_file.T);
+  std::string renamed = text;
+  renamed.replace(renamed.find("image_width"), 11, "image_wide_");
   try {
-    std::string renamed = text;
-    renamed.replace(renamed.find("image_width"), 11, "image_wide_");
+    const auto tried = naneye::recon::try_parse_rig({{"given.yaml", renamed}});
+    EXPECT_FALSE(tried.rig.has_value());
     naneye::recon::parse_rig({{"given.yaml", renamed}});
     ADD_FAILURE() << "a text without its keys was read";
   } catch (const naneye::recon::CalibrationError& e) {
+    // The refusal try_parse_rig returns is what parse_rig throws.
+    EXPECT_EQ(naneye::recon::try_parse_rig({{"given.yaml", renamed}}).refusal, e.what());
     EXPECT_NE(std::string(e.what()).find("given.yaml: key 'image_width': missing"), std::string::npos)
         << e.what();
   }

@@ -4,6 +4,7 @@
 // extrinsics file, optionally with *_sigma entries. docs/camera-model.md describes the format.
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,6 +28,15 @@ struct CalibrationText {
 // The rig that the texts hold together, as load_rig reads it from files (the same rules, the same
 // errors): the reader of what has already been read, from a file, a pipe or a fuzzer.
 StereoRig parse_rig(const std::vector<CalibrationText>& texts);
+
+// The same without throwing: the rig, or what parse_rig's CalibrationError would say. For callers
+// to whom a refused calibration is an expected outcome (a fuzzer: a throw costs 10-20 us, most of
+// what a refused text takes to read; docs/reliability.md, "Fifth run").
+struct RigOrRefusal {
+  std::optional<StereoRig> rig;
+  std::string refusal;  // set when rig is not
+};
+RigOrRefusal try_parse_rig(const std::vector<CalibrationText>& texts);
 
 // Reads a rig from one file holding every key, or from several files that together hold them
 // (for instance intrinsics.yml + extrinsics.yml). A key given twice with different values is refused.
