@@ -2,6 +2,7 @@
 
 #include <yaml.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
@@ -46,9 +47,17 @@ struct Pending {
 // together, to the document's children.
 class TreeBuilder {
  public:
-  explicit TreeBuilder(YamlDocument& doc) : doc_(doc) {
-    // A calibration's nodes (config/calib/paper-d3.yaml has 186) in one allocation, not eight.
-    pending_.reserve(256);
+  // Sized once for `text_size` bytes of YAML rather than grown from nothing (each growth is an
+  // allocation and a copy): the scalars' text is at most the text (escapes only shorten it; a
+  // resolved tag can be longer than its shorthand, and grows the buffer then), and a node takes at
+  // least two bytes (`a,`, `- `); config/calib/paper-d3.yaml, 2.3 kB, has 186 nodes.
+  TreeBuilder(YamlDocument& doc, std::size_t text_size) : doc_(doc) {
+    constexpr std::size_t kTypicalNodes = 256;
+    const std::size_t nodes = std::min(kTypicalNodes, text_size / 2 + 1);
+    doc_.text.reserve(text_size);
+    pending_.reserve(nodes);
+    items_.reserve(nodes);
+    child_index_.reserve(nodes);
   }
 
   // Takes one event of the first document; false once the document has ended or on a problem.
@@ -192,7 +201,7 @@ YamlParse parse_first_yaml_document(std::string_view text) {
                                text.size());
 
   YamlParse out;
-  TreeBuilder builder(out.document);
+  TreeBuilder builder(out.document, text.size());
   bool first_done = false;
   for (;;) {
     yaml_event_t event_state;
