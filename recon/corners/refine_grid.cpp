@@ -239,6 +239,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   // |b| beyond the noise), a corner is refused when its misfit exceeds twice that, and never below
   // model_misfit nor above twice it. On OpenCV's photographs the median is 6-13 % and no corner
   // exceeds 1.7x its frame's median; on the simulator the median is ~1-2 %, so model_misfit holds.
+  // The poor flag follows the frame the same way (CornerSettings::poor_per_median).
   std::array<double, kMaxCorners> misfit{};
   for (std::size_t i = 0; i < n; ++i) {
     const double excess = fits[i].rms * fits[i].rms - residual_bound(fits[i], radii[i], 0.0);
@@ -248,6 +249,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
                    misfit.begin() + static_cast<std::ptrdiff_t>(n));
   const double frame_misfit =
       std::clamp(2.0 * misfit[n / 2], settings_.model_misfit, 2.0 * settings_.model_misfit);
+  const double poor_misfit = std::max(settings_.poor_misfit, settings_.poor_per_median * misfit[n / 2]);
   for (std::size_t i = 0; i < n; ++i) {
     const SaddleFit& fit = fits[i];
     const double var_n = noise_.variance(fit.shading.a);
@@ -266,7 +268,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       failure_ = CornerFailure::fit_rejected;
       return false;
     }
-    if (fit.rms * fit.rms > residual_bound(fit, radii[i], settings_.poor_misfit)) flags[i] |= kCornerFitPoor;
+    if (fit.rms * fit.rms > residual_bound(fit, radii[i], poor_misfit)) flags[i] |= kCornerFitPoor;
     if (!fit.undistorted || !camera_.in_domain(fit.px)) flags[i] |= kCornerBeyondFold;
     Corner& k = out.corners[i];
     k.px = fit.px;

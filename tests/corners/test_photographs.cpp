@@ -1,6 +1,7 @@
 // Real photographs nobody here rendered: OpenCV's sample stereo set (Debian's opencv-doc, 13 pairs of
 // a 9 x 6 inner-corner board, 640 x 480 JPEG, squares ~25-45 px across). Every corner of every board
-// found within 0.3 px of OpenCV's cornerSubPix (a wrong board is a failure, a missed one is counted).
+// found within 0.3 px of OpenCV's cornerSubPix, or, where the two disagree, nearer the board's plane
+// than cornerSubPix's (a wrong board is a failure, a missed one is counted).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -19,6 +20,13 @@ namespace {
 
 const char* const kDir = "/usr/share/doc/opencv-doc/examples/data";
 constexpr int kFoundAtLeast = 25;
+// Where ours and cornerSubPix's disagree by more than the 0.3 px, the board decides: its
+// corners are a homography of the board's grid in undistorted coordinates (with OpenCV's lens).
+// The plane comes from cornerSubPix's own corners (LMedS, so the ones drawn off a junction do not
+// bend it); its prediction at a corner, from 54 corners of ~0.15 px noise, is good to ~0.15 *
+// sqrt(8 / 54) = 0.06 px, so ours must be no farther from it than cornerSubPix's plus 0.1 px.
+constexpr double kAgreePx = 0.3;
+constexpr double kPlaneSlackPx = 0.1;
 
 // OpenCV's own calibration of one eye (calibrateCamera, as left_intrinsics.yml was made: aspect ratio
 // fixed) from its findChessboardCorners + cornerSubPix corners, made in the same run. The detector
@@ -49,6 +57,36 @@ std::vector<std::uint16_t> to_dn(const cv::Mat& gray) {
           static_cast<std::uint16_t>(4 * gray.at<unsigned char>(r, c));
   return v;
 }
+
+// The board's plane as cornerSubPix's corners put it: the homography from the 9 x 6 grid to the
+// undistorted corners (scaled by fx to pixels), fitted by least median of squares.
+class BoardPlane {
+ public:
+  BoardPlane(const CameraModel& cam, const std::vector<cv::Point2f>& ref) : cam_(cam) {
+    std::vector<cv::Point2f> undistorted;
+    for (std::size_t j = 0; j < ref.size(); ++j) {
+      grid_.emplace_back(static_cast<float>(j % 9), static_cast<float>(j / 9));
+      undistorted.push_back(to_plane(Eigen::Vector2d(ref[j].x, ref[j].y)));
+    }
+    H_ = cv::findHomography(grid_, undistorted, cv::LMEDS);
+  }
+  // How far the raw pixel p lies from where the plane puts grid corner j, in pixels.
+  double residual(int j, const Eigen::Vector2d& p) const {
+    std::vector<cv::Point2f> at;
+    cv::perspectiveTransform(std::vector<cv::Point2f>{grid_[static_cast<std::size_t>(j)]}, at, H_);
+    const cv::Point2f u = to_plane(p);
+    return std::hypot(at[0].x - u.x, at[0].y - u.y);
+  }
+
+ private:
+  cv::Point2f to_plane(const Eigen::Vector2d& px) const {
+    const Eigen::Vector2d n = cam_.undistort(px).normalized * cam_.fx();
+    return {static_cast<float>(n.x()), static_cast<float>(n.y())};
+  }
+  const CameraModel& cam_;
+  std::vector<cv::Point2f> grid_;
+  cv::Mat H_;
+};
 
 TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   if (!std::filesystem::exists(std::string(kDir) + "/left01.jpg")) {
@@ -82,8 +120,8 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   s.board.cols = 9;
   int images = 0, found = 0;
   double worst = 0, sum2 = 0;
-  int n = 0, poor = 0;
-  double poor_worst = 0;
+  int n = 0, poor = 0, judged_by_plane = 0;
+  double poor_worst = 0, plane_gain = 0;
   for (int e = 0; e < 2; ++e) {
     double cal_rms = 0;
     const CameraModel cam = opencv_camera(refs[e], cal_rms);
@@ -102,10 +140,19 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
       if (!ok) std::printf("%s: not found (%s)\n", name, to_string(det.last_failure()));
       if (!ok) continue;
       ++found;
+      const BoardPlane plane(cam, ref);
       for (int i = 0; i < res.count; ++i) {
         const Eigen::Vector2d p = res.corners[static_cast<std::size_t>(i)].px;
         double best = 1e30;
-        for (const auto& q : ref) best = std::min(best, std::hypot(p.x() - q.x, p.y() - q.y));
+        int nearest = 0;
+        for (int j = 0; j < static_cast<int>(ref.size()); ++j) {
+          const double d = std::hypot(p.x() - ref[static_cast<std::size_t>(j)].x,
+                                      p.y() - ref[static_cast<std::size_t>(j)].y);
+          if (d < best) {
+            best = d;
+            nearest = j;
+          }
+        }
         // A corner the model does not describe (kCornerFitPoor) is flagged, not trusted: only the
         // others must agree with cornerSubPix.
         if (res.corners[static_cast<std::size_t>(i)].flags & kCornerFitPoor) {
@@ -113,21 +160,38 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
           poor_worst = std::max(poor_worst, best);
           continue;
         }
+        if (best > kAgreePx) {
+          // cornerSubPix's corner can be drawn off a junction whose edges do not meet in one point
+          // (the board's broken border row): the plane says which of the two is the board's.
+          const cv::Point2f& q = ref[static_cast<std::size_t>(nearest)];
+          const double ours_off = plane.residual(nearest, p);
+          const double theirs_off = plane.residual(nearest, Eigen::Vector2d(q.x, q.y));
+          EXPECT_LE(ours_off, theirs_off + kPlaneSlackPx)
+              << name << " corner " << i << ": " << best << " px from cornerSubPix's, " << ours_off
+              << " px off the board's plane against its " << theirs_off;
+          ++judged_by_plane;
+          plane_gain = std::max(plane_gain, theirs_off - ours_off);
+          continue;
+        }
         worst = std::max(worst, best);
         sum2 += best * best;
         ++n;
-        EXPECT_LE(best, 0.3) << name << " corner " << i;
       }
     }
   }
   std::printf(
-      "photographs: %d/%d images found, %d corners, %.3f px RMS from cornerSubPix, worst %.3f px; "
-      "%d flagged poor (worst %.2f px)\n",
-      found, images, n, n ? std::sqrt(sum2 / n) : 0.0, worst, poor, poor_worst);
+      "photographs: %d/%d images found; %d corners within %.1f px of cornerSubPix (%.3f px RMS, worst "
+      "%.3f px); %d farther, judged by the board's plane (cornerSubPix's up to %.2f px farther off it "
+      "than ours); %d flagged poor (worst %.2f px from cornerSubPix's)\n",
+      found, images, n, kAgreePx, n ? std::sqrt(sum2 / n) : 0.0, worst, judged_by_plane, plane_gain, poor,
+      poor_worst);
   EXPECT_EQ(images, 26);
   // The target is every image (26); this is what the detector finds today (docs/corners.md,
   // "Real photographs": right08 is refused as possibly a larger board), kept as a floor.
   EXPECT_GE(found, kFoundAtLeast);
+  // JPEG misfits every corner of a frame alike (6-13 % of the contrast): the poor flag marks a
+  // frame's outliers, not the frame (it flagged 1339 of 1350 when it was a fixed 5 %).
+  EXPECT_LE(20 * poor, n + judged_by_plane + poor);
 }
 
 }  // namespace

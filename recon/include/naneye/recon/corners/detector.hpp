@@ -109,11 +109,15 @@ struct CornerSettings {
   // 3.7 % at the 99.9th percentile of bench_corners' corners (noise included); 8-13 % on real
   // photographs (OpenCV's sample stereo set: JPEG blocks and ringing, a PSF that is no Gaussian).
   double model_misfit = 0.15;
-  // A corner whose misfit exceeds this share of |b| (beyond the noise) is flagged kCornerFitPoor:
-  // the model does not describe it as well as the simulator's 99.9th percentile (3.7 %), e.g. the two
-  // edges through it do not meet in one point (a bent or misprinted board: seen 1.5-6 px from
-  // cornerSubPix's on OpenCV's photographs). Downstream does not use flagged corners.
+  // A corner whose misfit (beyond the noise, as a share of |b|) exceeds both poor_misfit and
+  // poor_per_median times its frame's median misfit is flagged kCornerFitPoor: the model describes
+  // it worse than the simulator's 99.9th percentile (3.7 %) and worse than this frame's typical
+  // corner. The frame's share matters where the imaging chain misfits every corner alike (JPEG
+  // blocks and ringing: a median of 6-13 % on OpenCV's photographs, whose corners are still 0.05 px
+  // from cornerSubPix's); 1.5: the worst corner of those frames is 1.19-1.66x its median, so the few
+  // above 1.5x are the frame's outliers. Downstream does not use flagged corners.
   double poor_misfit = 0.05;
+  double poor_per_median = 1.5;
   // The contrast (white - black) at least this many noise standard deviations: a step that noise
   // crosses on one pixel in ~1000 (3 sigma each side), i.e. a board plainly visible.
   double min_contrast_snr = 6.0;
