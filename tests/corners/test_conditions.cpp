@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <string>
 
 #include "corner_test_util.hpp"
 #include "imaging_conditions.hpp"
@@ -14,49 +15,105 @@ namespace {
 
 constexpr int kPairsPerCondition = 2;
 
-TEST(Conditions, EveryConditionFindsEveryInViewBoardWithoutFalseCorners) {
+// Renders kPairsPerCondition pairs of `cond` and detects both eyes: every in-view pair found (when the
+// condition expects it), every returned corner where the truth has it.
+// By default the pairs' poses come from seed 31 and their noise from 700 + k; a test may take the
+// bench's own (bench_conditions: poses 1212, noise 4000 + k) to replay pairs that failed there.
+struct PairSource {
+  std::uint64_t pose_seed = 31, noise_seed = 700;
+  int pairs = kPairsPerCondition;
+};
+
+void check_condition(const test::ImagingCondition& cond, const PairSource& src = {}) {
   const StereoRig& rig = test::paper_d3();
   CornerDetector left(rig.left), right(rig.right);
-  for (const test::ImagingCondition& cond : test::imaging_conditions()) {
-    const sim::Renderer renderer(rig, cond.scene, cond.sensor);
-    std::mt19937_64 poses(31);
-    int in_view = 0, found = 0;
-    double worst = 0, sum2 = 0;
-    int n = 0;
-    for (int k = 0; k < kPairsPerCondition; ++k) {
-      const sim::Pose pose = test::random_pose(poses);
-      sim::Rng rng(700 + static_cast<std::uint64_t>(k));
-      const sim::RenderedPair p = renderer.render(pose, rng);
-      if (!p.truth.board_in_view) continue;
-      ++in_view;
-      for (const bool is_left : {true, false}) {
-        CornerDetector& det = is_left ? left : right;
-        CornerResult res;
-        const bool ok = det.detect_full(sim::raw_view(is_left ? p.left : p.right, cond.sensor.bayer), res);
+  const sim::Renderer renderer(rig, cond.scene, cond.sensor);
+  std::mt19937_64 poses(src.pose_seed);
+  int in_view = 0, found = 0;
+  double worst = 0, sum2 = 0;
+  int n = 0;
+  for (int k = 0; k < src.pairs; ++k) {
+    const sim::Pose pose = test::condition_pose(cond, rig, poses);
+    sim::Rng rng(src.noise_seed + static_cast<std::uint64_t>(k));
+    const sim::RenderedPair p = renderer.render(pose, rng);
+    if (!p.truth.board_in_view) continue;
+    ++in_view;
+    for (const bool is_left : {true, false}) {
+      CornerDetector& det = is_left ? left : right;
+      CornerResult res;
+      const bool ok = det.detect_full(sim::raw_view(is_left ? p.left : p.right, cond.sensor.bayer), res);
+      if (cond.expect_found) {
         EXPECT_TRUE(ok) << cond.name << " pair " << k << (is_left ? " left: " : " right: ")
                         << to_string(det.last_failure());
-        if (!ok) continue;
-        found += !is_left;
-        const auto& truth = is_left ? p.truth.left_px : p.truth.right_px;
-        const bool turned = test::best_turn(res, truth);
-        for (int i = 0; i < res.count; ++i) {
-          const double e = (res.corners[static_cast<std::size_t>(i)].px -
-                            truth[static_cast<std::size_t>(turned ? res.count - 1 - i : i)])
-                               .norm();
-          worst = std::max(worst, e);
-          sum2 += e * e;
-          ++n;
-        }
+      }
+      if (!ok) {
+        EXPECT_EQ(res.count, 0) << cond.name;
+        continue;
+      }
+      found += !is_left;
+      const auto& truth = is_left ? p.truth.left_px : p.truth.right_px;
+      const bool turned = test::best_turn(res, truth);
+      for (int i = 0; i < res.count; ++i) {
+        const double e = (res.corners[static_cast<std::size_t>(i)].px -
+                          truth[static_cast<std::size_t>(turned ? res.count - 1 - i : i)])
+                             .norm();
+        worst = std::max(worst, e);
+        sum2 += e * e;
+        ++n;
       }
     }
-    const double rms = n ? std::sqrt(sum2 / n) : 0.0;
-    std::printf("%-48s in view %d, corners %d, RMS %.4f px, worst %.3f px\n", cond.name.c_str(), in_view, n,
-                rms, worst);
-    EXPECT_GE(in_view, 1) << cond.name;
-    // No false corner: every returned corner where the truth has it (OpenCV's path: 0.1-0.4 px RMS).
-    EXPECT_LE(worst, 0.25) << cond.name;
-    EXPECT_LE(rms, 0.08) << cond.name;
   }
+  const double rms = n ? std::sqrt(sum2 / n) : 0.0;
+  std::printf("%-48s in view %d, corners %d, RMS %.4f px, worst %.3f px\n", cond.name.c_str(), in_view, n,
+              rms, worst);
+  // Geometry conditions draw only poses with every inner corner in view.
+  if (cond.poses) {
+    EXPECT_EQ(in_view, src.pairs) << cond.name;
+  }
+  EXPECT_GE(in_view, 1) << cond.name;
+  // No false corner: every returned corner where the truth has it (OpenCV's path: 0.1-0.4 px RMS).
+  EXPECT_LE(worst, 0.25) << cond.name;
+  EXPECT_LE(rms, 0.08) << cond.name;
+}
+
+// The conditions whose name starts with `prefix` (mono and Bayer).
+void check_conditions(const std::string& prefix, const PairSource& src = {}) {
+  int checked = 0;
+  for (const test::ImagingCondition& cond : test::imaging_conditions()) {
+    if (cond.name.rfind(prefix, 0) != 0) continue;
+    check_condition(cond, src);
+    ++checked;
+  }
+  EXPECT_GE(checked, 1) << prefix;
+}
+
+TEST(Conditions, EveryConditionFindsEveryInViewBoardWithoutFalseCorners) {
+  for (const test::ImagingCondition& cond : test::imaging_conditions()) {
+    if (!cond.poses) check_condition(cond);
+  }
+}
+
+// Board at 36-50 mm filling the view, exposure set for that range (mono, Bayer).
+TEST(Conditions, CloseBoardsAreFound) {
+  check_conditions("close: ");
+}
+
+// The same close boards at the exposure for 70 mm: whites clipped at ~3x the clip level. Not all
+// found yet (a clipped X-junction can lose its saddle): what is found must be right.
+TEST(Conditions, CloseClippedBoardsGiveNoFalseCorners) {
+  check_conditions("close at 36-50 mm, exposure for 70 mm");
+}
+
+// Boards tilted 45-60 degrees at Dataset 3's distances: the bench's first 4 pairs, of which 0 and 3
+// are refused (fit_rejected: the model misfits edges imaged ~60 degrees apart). What is found must be
+// right: windows sized by the distance to the next parallel edge found them, 0.5 px off (tried, not kept).
+TEST(Conditions, SteeplyTiltedBoardsGiveNoFalseCorners) {
+  check_conditions("tilt 45-60", PairSource{1212, 4000, 4});
+}
+
+// Squares of ~4-6 px: not found yet (nor by OpenCV), but never a false corner.
+TEST(Conditions, FarBoardsGiveNoFalseCorners) {
+  check_conditions("far: ");
 }
 
 TEST(Conditions, NoBoardUnderTheRealSensorGivesNothing) {
