@@ -134,8 +134,17 @@ void CornerDetector::luminance_and_noise(const RawImageView& image, int row_lo, 
   const float* mosaic = bayer_ ? scratch_.data() : luma_.data();
   const int r0 = std::max(row_lo, image.ignore_edge_rows),
             r1 = std::min(hi, height_ - image.ignore_edge_rows);
-  const NoiseModel m =
-      noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols, bayer_ ? 2 : 1);
+  // A clipped site of the balanced mosaic reads (1020 - offset) / gain: with a gain above 1 that is
+  // below 1020, and a block of them (zero variance, heavy weight) would pull the noise line to the
+  // quantisation floor (seen: sigma 0.1 DN where the truth is 2.5 on tilted and close boards).
+  std::array<float, 4> clip;
+  for (std::size_t k = 0; k < 4; ++k) {
+    clip[k] = bayer_ && balance_.valid
+                  ? (NoiseEstimator::kDefaultClipDn - balance_.offset[k]) / balance_.gain[k]
+                  : NoiseEstimator::kDefaultClipDn;
+  }
+  const NoiseModel m = noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols,
+                                                 bayer_ ? 2 : 1, clip);
   const double f = bayer_ ? 36.0 / 256.0 : 1.0;
   noise_ = NoiseModel{m.a * f, m.b * f, m.levels};
 }
