@@ -255,6 +255,10 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     const float* mxy = map.xy_data() + 2 * row;
     const float* im = img.data + static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(img.width) +
                       static_cast<std::size_t>(cx);
+    const std::uint8_t* clip =
+        img.clipped ? img.clipped + static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(img.width) +
+                          static_cast<std::size_t>(cx)
+                    : nullptr;
     const float fr = static_cast<float>(r) * inv_half;
     for (int q = q0; q <= q1; ++q, ++n) {
       float yx = static_cast<float>(q), yy = static_cast<float>(r);
@@ -269,7 +273,8 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
       wyy[n] = yy;
       val[n] = im[q];
       // A clipped pixel only says the light was at least full scale: it takes no part in the fit.
-      wt[n] = im[q] >= kClipDn ? 0.0f : std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
+      wt[n] = im[q] >= kClipDn || (clip && clip[q]) ? 0.0f
+                                                    : std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
     }
   }
 

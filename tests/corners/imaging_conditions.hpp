@@ -131,9 +131,8 @@ inline std::vector<ImagingCondition> imaging_conditions() {
   // most of the view (squares ~25-35 px at the centre).
   geometry("close: board at 36-50 mm", PoseRange{36, 50, 0, 40, 4}, true);
   // The same with the exposure left at Dataset 3's 70 mm: the light is (70 / 43)^2 ~ 2.7x, whites
-  // clip at ~3x the clip level and the bright quadrants' blur eats into the dark squares. Not yet
-  // found in every pair (docs/corners.md: 10 and 8 of 12, OpenCV 12): only no false corner is checked.
-  geometry("close at 36-50 mm, exposure for 70 mm (whites clipped)", PoseRange{36, 50, 0, 40, 4}, false, 70);
+  // clip at ~3x the clip level and the bright quadrants' blur eats into the dark squares.
+  geometry("close at 36-50 mm, exposure for 70 mm (whites clipped)", PoseRange{36, 50, 0, 40, 4}, true, 70);
   // Far: Dataset 3's 5.99 mm squares at 216 px focal length are ~6 px across at 215 mm and ~4 px
   // at 320 mm (the smallest); the whole board stays in view at any larger distance.
   // Not yet expected found: OpenCV finds none either, and our grid search needs ~7 px squares.

@@ -30,8 +30,8 @@ void check_condition(const test::ImagingCondition& cond, const PairSource& src =
   const sim::Renderer renderer(rig, cond.scene, cond.sensor);
   std::mt19937_64 poses(src.pose_seed);
   int in_view = 0, found = 0;
-  double worst = 0, sum2 = 0;
-  int n = 0;
+  double worst = 0, sum2 = 0, worst_flagged = 0;
+  int n = 0, flagged = 0;
   for (int k = 0; k < src.pairs; ++k) {
     const sim::Pose pose = test::condition_pose(cond, rig, poses);
     sim::Rng rng(src.noise_seed + static_cast<std::uint64_t>(k));
@@ -54,9 +54,13 @@ void check_condition(const test::ImagingCondition& cond, const PairSource& src =
       const auto& truth = is_left ? p.truth.left_px : p.truth.right_px;
       const bool turned = test::best_turn(res, truth);
       for (int i = 0; i < res.count; ++i) {
-        const double e = (res.corners[static_cast<std::size_t>(i)].px -
-                          truth[static_cast<std::size_t>(turned ? res.count - 1 - i : i)])
-                             .norm();
+        const Corner& c = res.corners[static_cast<std::size_t>(i)];
+        const double e = (c.px - truth[static_cast<std::size_t>(turned ? res.count - 1 - i : i)]).norm();
+        if (c.flags & kCornerFitPoor) {  // marginal, left out downstream: still no false corner
+          worst_flagged = std::max(worst_flagged, e);
+          ++flagged;
+          continue;
+        }
         worst = std::max(worst, e);
         sum2 += e * e;
         ++n;
@@ -64,16 +68,18 @@ void check_condition(const test::ImagingCondition& cond, const PairSource& src =
     }
   }
   const double rms = n ? std::sqrt(sum2 / n) : 0.0;
-  std::printf("%-48s in view %d, corners %d, RMS %.4f px, worst %.3f px\n", cond.name.c_str(), in_view, n,
-              rms, worst);
+  std::printf("%-48s in view %d, corners %d, RMS %.4f px, worst %.3f px; flagged poor %d, worst %.3f px\n",
+              cond.name.c_str(), in_view, n, rms, worst, flagged, worst_flagged);
   // Geometry conditions draw only poses with every inner corner in view.
   if (cond.poses) {
     EXPECT_EQ(in_view, src.pairs) << cond.name;
   }
   EXPECT_GE(in_view, 1) << cond.name;
-  // No false corner: every returned corner where the truth has it (OpenCV's path: 0.1-0.4 px RMS).
+  // No false corner: every unflagged corner where the truth has it (OpenCV's path: 0.1-0.4 px RMS),
+  // the flagged ones within 0.5 px (bench_conditions' bound for a false corner).
   EXPECT_LE(worst, 0.25) << cond.name;
   EXPECT_LE(rms, 0.08) << cond.name;
+  EXPECT_LE(worst_flagged, 0.5) << cond.name;
 }
 
 // The conditions whose name starts with `prefix` (mono and Bayer).
@@ -98,9 +104,10 @@ TEST(Conditions, CloseBoardsAreFound) {
   check_conditions("close: ");
 }
 
-// The same close boards at the exposure for 70 mm: whites clipped at ~3x the clip level. Not all
-// found yet (a clipped X-junction can lose its saddle): what is found must be right.
-TEST(Conditions, CloseClippedBoardsGiveNoFalseCorners) {
+// The same close boards at the exposure for 70 mm: whites clipped at ~3x the clip level. On the Bayer
+// path both pairs were refused (fit_rejected) while luminance pixels mixing a clipped site took part
+// in the fits; corners whose edge midpoints lie beyond the clip are flagged poor.
+TEST(Conditions, CloseClippedBoardsAreFound) {
   check_conditions("close at 36-50 mm, exposure for 70 mm");
 }
 
