@@ -48,7 +48,7 @@ simd::ModelParams model_params(const Vec& p) {
           float(p[10])};
 }
 
-// The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2 (corners/simd.hpp).
+// The geometry part of the model at p: u1, u2, S and the factors of its derivatives (corners/simd.hpp).
 void shape(FastFitScratch& w, int n, const simd::ModelParams& m) {
   (w.use_avx2 ? simd::shape_avx2 : simd::shape_sse)(m, w.yx.data(), w.yy.data(), n, w.U1.data(), w.U2.data(),
                                                     w.E1.data(), w.E2.data(), w.G1.data(), w.G2.data(),
