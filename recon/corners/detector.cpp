@@ -159,7 +159,9 @@ void CornerDetector::mark_clipped(const RawImageView& image, int row_lo, int row
   if (!bayer_) return;
   constexpr std::uint16_t kClipRaw = 1020;  // 10-bit full scale less 8-bit data's quantum (x 4)
   const int w = width_, h = height_;
-  const int r0 = std::max(row_lo - 1, 0), r1 = std::min(row_hi + 1, h);
+  // Reference rows are no light (the luminance replaces them by same-site neighbours).
+  const int r0 = std::max(row_lo - 1, image.ignore_edge_rows);
+  const int r1 = std::min(row_hi + 1, h - image.ignore_edge_rows);
   const int c_end = w - image.ignore_last_cols;
   for (int r = r0; r < r1 && !any_clipped_; ++r) {
     const std::uint16_t* p = image.data + static_cast<std::ptrdiff_t>(r) * image.stride;
