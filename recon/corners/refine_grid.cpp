@@ -121,6 +121,13 @@ void CornerDetector::grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& 
       e.normalized_ok = ok[at(r, c0)] && ok[at(r, c1)] && ok[at(r0, c)] && ok[at(r1, c)];
       e.row_n = xn[at(r, c1)] - xn[at(r, c0)];
       e.col_n = xn[at(r1, c)] - xn[at(r0, c)];
+      // The grid's cell at this corner: the next row line lies area / |row step| away along the row
+      // edge's normal, the next column line area / |column step| along the other (the spacing for a
+      // square grid, less for a skewed one).
+      const Eigen::Vector2d dc = e.row_px / (c1 - c0), dr = e.col_px / (r1 - r0);
+      const double area = std::abs(dc.x() * dr.y() - dc.y() * dr.x());
+      e.row_line_px = dc.norm() > 0 ? area / dc.norm() : 0.0;
+      e.col_line_px = dr.norm() > 0 ? area / dr.norm() : 0.0;
     }
   }
 }

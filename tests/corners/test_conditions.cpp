@@ -112,9 +112,9 @@ TEST(Conditions, CloseClippedBoardsAreFound) {
 }
 
 // Boards tilted 45-60 degrees at Dataset 3's distances: the bench's first 4 pairs, of which 0 and 3
-// are refused (fit_rejected: the model misfits edges imaged ~60 degrees apart). What is found must be
-// right: windows sized by the distance to the next parallel edge found them, 0.5 px off (tried, not kept).
-TEST(Conditions, SteeplyTiltedBoardsGiveNoFalseCorners) {
+// were refused in both eyes (fit_rejected: edges imaged ~45 degrees apart, misfitted by the product of
+// erfs, and the next grid line inside the square window).
+TEST(Conditions, SteeplyTiltedBoardsAreFound) {
   check_conditions("tilt 45-60", PairSource{1212, 4000, 4});
 }
 
