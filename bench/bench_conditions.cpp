@@ -70,7 +70,7 @@ void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, b
   for (auto _ : state) {
     std::mt19937_64 poses(1212);
     for (int k = 0; k < kPairs; ++k) {
-      const sim::Pose pose = test::random_pose(poses);
+      const sim::Pose pose = test::condition_pose(cond, rig, poses);
       sim::Rng rng(4000 + static_cast<std::uint64_t>(k));
       const sim::RenderedPair p = renderer.render(pose, rng);
       const bool in_view = board && p.truth.board_in_view;
@@ -85,6 +85,17 @@ void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, b
       const recon::CornerFailure why_r = right.last_failure();
       if (!fl) ++row.failures[recon::to_string(why_l)];
       if (!fr) ++row.failures[recon::to_string(why_r)];
+      // Which corner failed and by how much (stderr: the table on stdout stays a table).
+      for (const recon::CornerDetector* d : {&left, &right}) {
+        if ((d == &left ? fl : fr) || !in_view) continue;
+        const recon::CornerRejection& j = d->last_rejection();
+        std::fprintf(stderr,
+                     "%s pair %d %s: %s corner %d rms %.1f bound %.1f DN contrast %.0f noise %.1f level %.0f "
+                     "sigma %.2f radius %.1f px\n",
+                     cond.name.c_str(), k, d == &left ? "left" : "right", recon::to_string(d->last_failure()),
+                     j.index, j.rms, j.bound_rms, j.contrast, j.noise_sigma, j.level, j.sigma_px,
+                     j.radius_px);
+      }
       const std::vector<Eigen::Vector2d> none;
       const auto& tl = board ? p.truth.left_px : none;
       const auto& tr = board ? p.truth.right_px : none;

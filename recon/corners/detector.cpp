@@ -77,6 +77,7 @@ CornerDetector::CornerDetector(const CameraModel& camera, const CornerSettings& 
       coarse_finder_(camera, settings.coarse) {
   luma_.resize(static_cast<std::size_t>(width_) * height_);
   scratch_.resize(luma_.size());
+  clipped_.resize(luma_.size());
   coarse_.resize(kMaxCorners);
   gray8_.resize(luma_.size());
   map_ = std::make_shared<const UndistortMap>(camera_);
@@ -131,13 +132,62 @@ void CornerDetector::luminance_and_noise(const RawImageView& image, int row_lo, 
   raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn, row_lo, row_hi, &balance_);
   // The noise of the (balanced) mosaic, then of the luminance: the 3 x 3 binomial's weights
   // squared sum to 36 / 256 (correlating neighbours, which residual_bound accounts for).
+  mark_clipped(image, row_lo, hi);
   const float* mosaic = bayer_ ? scratch_.data() : luma_.data();
   const int r0 = std::max(row_lo, image.ignore_edge_rows),
             r1 = std::min(hi, height_ - image.ignore_edge_rows);
-  const NoiseModel m =
-      noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols, bayer_ ? 2 : 1);
+  // A clipped site of the balanced mosaic reads (1020 - offset) / gain: with a gain above 1 that is
+  // below 1020, and a block of them (zero variance, heavy weight) would pull the noise line to the
+  // quantisation floor (seen: sigma 0.1 DN where the truth is 2.5 on tilted and close boards).
+  std::array<float, 4> clip;
+  for (std::size_t k = 0; k < 4; ++k) {
+    clip[k] = bayer_ && balance_.valid
+                  ? (NoiseEstimator::kDefaultClipDn - balance_.offset[k]) / balance_.gain[k]
+                  : NoiseEstimator::kDefaultClipDn;
+  }
+  const NoiseModel m = noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols,
+                                                 bayer_ ? 2 : 1, clip);
   const double f = bayer_ ? 36.0 / 256.0 : 1.0;
   noise_ = NoiseModel{m.a * f, m.b * f, m.levels};
+}
+
+void CornerDetector::mark_clipped(const RawImageView& image, int row_lo, int row_hi) {
+  // A Bayer luminance pixel is the 3 x 3 binomial of its mosaic neighbourhood: one clipped site in it
+  // (a balanced clipped site reads (1020 - offset) / gain, under the clip for a gain above 1) makes
+  // a value that looks linear and is not. Mono pixels are judged by their own value (>= 1020).
+  any_clipped_ = false;
+  if (!bayer_) return;
+  constexpr std::uint16_t kClipRaw = 1020;  // 10-bit full scale less 8-bit data's quantum (x 4)
+  const int w = width_, h = height_;
+  // Reference rows are no light (the luminance replaces them by same-site neighbours).
+  const int r0 = std::max(row_lo - 1, image.ignore_edge_rows);
+  const int r1 = std::min(row_hi + 1, h - image.ignore_edge_rows);
+  const int c_end = w - image.ignore_last_cols;
+  for (int r = r0; r < r1 && !any_clipped_; ++r) {
+    const std::uint16_t* p = image.data + static_cast<std::ptrdiff_t>(r) * image.stride;
+    any_clipped_ = *std::max_element(p, p + c_end) >= kClipRaw;
+  }
+  if (!any_clipped_) return;
+  // Bit 1: a clipped site and its two horizontal neighbours; bit 2: the rows above and below those.
+  std::fill(clipped_.begin() + static_cast<std::ptrdiff_t>(r0) * w,
+            clipped_.begin() + static_cast<std::ptrdiff_t>(r1) * w, 0);
+  for (int r = r0; r < r1; ++r) {
+    const std::uint16_t* p = image.data + static_cast<std::ptrdiff_t>(r) * image.stride;
+    std::uint8_t* m = clipped_.data() + static_cast<std::ptrdiff_t>(r) * w;
+    for (int c = 0; c < c_end; ++c) {
+      if (p[c] < kClipRaw) continue;
+      for (int dc = -1; dc <= 1; ++dc)
+        if (c + dc >= 0 && c + dc < w) m[c + dc] |= 1;
+    }
+  }
+  for (int r = r0; r < r1; ++r) {
+    std::uint8_t* m = clipped_.data() + static_cast<std::ptrdiff_t>(r) * w;
+    for (int c = 0; c < w; ++c) {
+      if (!(m[c] & 1)) continue;
+      if (r - 1 >= r0) clipped_[static_cast<std::size_t>((r - 1) * w + c)] |= 2;
+      if (r + 1 < r1) clipped_[static_cast<std::size_t>((r + 1) * w + c)] |= 2;
+    }
+  }
 }
 
 std::pair<int, int> CornerDetector::tracking_rows(const CornerResult& previous) const {
@@ -184,7 +234,7 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool
 }
 
 bool CornerDetector::full_search(CornerResult& out) {
-  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_, nullptr};
   bool found = coarse_finder_.find(v, settings_.board.rows, settings_.board.cols, coarse_.data(), &noise_);
   if (!found && settings_.opencv_fallback) {
     found = coarse_grid_opencv(v, settings_.board.rows, settings_.board.cols, gray8_, coarse_);
@@ -210,7 +260,7 @@ bool CornerDetector::full_search(CornerResult& out) {
 
 bool CornerDetector::validate(const CornerResult& out) {
   // Every corner a saddle of the right polarity: a checkerboard alternates along rows and columns.
-  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_};
+  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_, nullptr};
   const int p0 = corner_polarity(v, out, 0, 0);
   failure_ = CornerFailure::polarity;
   if (p0 == 0) return false;

@@ -18,6 +18,11 @@ constexpr double kOutlierCheckRelative = 0.05;  // see the outlier check in fit_
 constexpr int kMaxOutliers = 4;
 // 10-bit full scale (1023) less the quantum of 8-bit data scaled by 4 (255 x 4 = 1020).
 constexpr float kClipDn = 1020.0f;
+// A blurred edge reaches 2.5 sigma (erf 0.9996 of its step) into the window; the fitted blur is at
+// least the lens's (the real NanEye's ~1 px, the simulator's 0.3-0.4 px), taken as 0.5 px when the
+// start knows none better.
+constexpr double kBlurReach = 2.5;
+constexpr double kMinBlurForReachPx = 0.5;
 using Arr = FastFitScratch::Arr;
 using Vec = Eigen::Matrix<double, kParams, 1>;
 // The normal equations of K active parameters: fixed sizes, so Eigen unrolls their solve.
@@ -48,7 +53,7 @@ simd::ModelParams model_params(const Vec& p) {
           float(p[10])};
 }
 
-// The geometry part of the model at p: u1, u2, both erf and Gaussians, S = E1 E2 (corners/simd.hpp).
+// The geometry part of the model at p: u1, u2, S and the factors of its derivatives (corners/simd.hpp).
 void shape(FastFitScratch& w, int n, const simd::ModelParams& m) {
   (w.use_avx2 ? simd::shape_avx2 : simd::shape_sse)(m, w.yx.data(), w.yy.data(), n, w.U1.data(), w.U2.data(),
                                                     w.E1.data(), w.E2.data(), w.G1.data(), w.G2.data(),
@@ -255,6 +260,10 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     const float* mxy = map.xy_data() + 2 * row;
     const float* im = img.data + static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(img.width) +
                       static_cast<std::size_t>(cx);
+    const std::uint8_t* clip =
+        img.clipped ? img.clipped + static_cast<std::size_t>(cy + r) * static_cast<std::size_t>(img.width) +
+                          static_cast<std::size_t>(cx)
+                    : nullptr;
     const float fr = static_cast<float>(r) * inv_half;
     for (int q = q0; q <= q1; ++q, ++n) {
       float yx = static_cast<float>(q), yy = static_cast<float>(r);
@@ -269,7 +278,8 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
       wyy[n] = yy;
       val[n] = im[q];
       // A clipped pixel only says the light was at least full scale: it takes no part in the fit.
-      wt[n] = im[q] >= kClipDn ? 0.0f : std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
+      wt[n] = im[q] >= kClipDn || (clip && clip[q]) ? 0.0f
+                                                    : std::min(wr, wcol[static_cast<std::size_t>(q + half)]);
     }
   }
 
@@ -287,6 +297,23 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     }
     p[2] = std::atan2(t1.y(), t1.x()) + kHalfPi;
     p[3] = std::atan2(t2.y(), t2.x()) + kHalfPi;
+    // The model holds one X-junction: the square window must not reach the next grid lines, which on
+    // a skewed grid (edges ~45 degrees apart at steep tilts) lie nearer than the window's corners
+    // along the edge normals. Pixels within kBlurReach blurs of a next line lose their weight (1 px
+    // taper), the others stay: the window keeps its length along the edges, which hold the corner.
+    if (edges->row_line_px > 0 && edges->col_line_px > 0) {
+      const double s_blur = std::max(init.sigma, kMinBlurForReachPx);
+      const float lim1 = static_cast<float>(edges->row_line_px - kBlurReach * s_blur);
+      const float lim2 = static_cast<float>(edges->col_line_px - kBlurReach * s_blur);
+      const float c1 = static_cast<float>(std::cos(p[2])), s1 = static_cast<float>(std::sin(p[2]));
+      const float c2 = static_cast<float>(std::cos(p[3])), s2 = static_cast<float>(std::sin(p[3]));
+      const float ox = static_cast<float>(off.x()), oy = static_cast<float>(off.y());
+      for (int i = 0; i < n; ++i) {
+        const float x = wyx[i] - ox, y = wyy[i] - oy;
+        const float a1 = std::abs(c1 * x + s1 * y), a2 = std::abs(c2 * x + s2 * y);
+        wt[i] *= std::clamp(lim1 + 0.5f - a1, 0.0f, 1.0f) * std::clamp(lim2 + 0.5f - a2, 0.0f, 1.0f);
+      }
+    }
   }
   const double h = half;
   const Eigen::Vector2d centre(cx, cy);

@@ -20,8 +20,6 @@ constexpr double kMadToSigma = 0.6744897501960817;
 constexpr double kContaminated = 2.0;
 // A level range narrower than this (DN) cannot separate a from b: the model is then a constant.
 constexpr double kMinLevelSpanDn = 48.0;
-// 10-bit full scale less the quantum of 8-bit data scaled by 4: a block reaching it may be clipped.
-constexpr float kClipDn = 1020.0f;
 
 struct Line {
   double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -44,7 +42,8 @@ double upper_normal_quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
-NoiseModel NoiseEstimator::estimate(const float* img, int w, int row_lo, int row_hi, int col_end, int step) {
+NoiseModel NoiseEstimator::estimate(const float* img, int w, int row_lo, int row_hi, int col_end, int step,
+                                    const std::array<float, 4>& clip_dn) {
   // The data's quantum: the smallest nonzero |a - b - e + f| of integer data is its step (1 for
   // 10-bit DN, 4 for 8-bit images scaled to 10 bits); the quantisation's variance step^2 / 12 is
   // the least noise the decisions may assume (JPEG's smoothing can leave flat areas quieter).
@@ -62,7 +61,8 @@ NoiseModel NoiseEstimator::estimate(const float* img, int w, int row_lo, int row
         for (int c = c0; c < c0 + step; ++c) {
           const float a = p[c], b = p[c + step], e = q[c], f = q[c + step];
           // Saturated blocks carry no noise (and 8-bit images scaled to 10 bits end at 1020).
-          if (std::max(std::max(a, b), std::max(e, f)) >= kClipDn) continue;
+          const float clip = clip_dn[step == 1 ? 0 : static_cast<std::size_t>(((r0 + dr) & 1) * 2 + (c & 1))];
+          if (std::max(std::max(a, b), std::max(e, f)) >= clip) continue;
           const float level = 0.25f * (a + b + e + f);
           const int lb = std::clamp(static_cast<int>(level / kLevelBinDn), 0, kLevelBins - 1);
           const float dd = std::abs(a - b - e + f);

@@ -102,25 +102,72 @@ struct ModelParams {
   float qx, qy, c1, s1, c2, s2, k, inv_s, a, gx, gy, b, hx, hy;
 };
 
-// u1, u2, both erf and Gaussians and S = E1 E2 for the window's n pixels (rounded up to whole
-// vectors: the arrays hold kMaxPixels, a multiple of 8).
+// Edges within this of perpendicular (|rho| = |n1 . n2|, the cosine of the angle between the
+// normals) use the product of erfs, which is the blurred corner exactly at rho = 0; its misfit grows
+// with |rho| (docs/experiments/wedge_fit.cpp: 1.5-2 % of |b| at 80 degrees, 4.4-5.7 % at 60), and
+// beyond 0.1 (6 degrees off, ~1 % of |b|: a third of the simulator's 99.9th-percentile misfit) the
+// exact form costs 8 more exponentials and 2 erfs per pixel rather than a biased corner.
+inline constexpr float kExactCornerRho = 0.1f;
+
+// Gauss-Legendre, 8 nodes on [-1, 1] (abscissae and weights, the positive half).
+inline constexpr std::array<float, 4> kGaussLegendreX = {0.18343464249564980f, 0.52553240991632899f,
+                                                         0.79666647741362674f, 0.96028985649753623f};
+inline constexpr std::array<float, 4> kGaussLegendreW = {0.36268378337836198f, 0.31370664587788729f,
+                                                         0.22238103445337447f, 0.10122853629037626f};
+
+// u1, u2 and the model's shape S for the window's n pixels (rounded up to whole vectors: the arrays
+// hold kMaxPixels, a multiple of 8), with what its derivatives need: dS/du1 = (2 / sqrt pi) k G1 E2
+// and dS/du2 = (2 / sqrt pi) k G2 E1. For perpendicular edges S = E1 E2, E_k = erf(k u_k), G_k =
+// exp(-(k u_k)^2). Otherwise the blurred X-junction is E[sign X1 sign X2] for X_k ~ N(sqrt2 k u_k, 1)
+// correlated by rho (Drezner & Wesolowsky 1990, with z_k = k u_k):
+//   S = erf(z1) erf(z2) + (2 / pi) int_0^rho exp(-(z1^2 - 2 r z1 z2 + z2^2) / (1 - r^2)) dr / sqrt(1 - r^2),
+// and E2, E1 above become erf((z2 - rho z1) / sqrt(1 - rho^2)) and erf((z1 - rho z2) / sqrt(1 - rho^2)).
+// (The integral's derivative in rho is left out of the free-edge fit's Jacobian: that fit only seeds
+// the one with the grid's edges, whose rho is fixed.)
 template <class V>
 NANEYE_SIMD_INLINE void shape(const ModelParams& m, const float* yx, const float* yy, int n, float* U1,
                               float* U2, float* E1, float* E2, float* G1, float* G2, float* S) {
   constexpr int L = kLanes<V>;
+  const float rho = m.c1 * m.c2 + m.s1 * m.s2;
+  const bool exact = rho > kExactCornerRho || rho < -kExactCornerRho;
+  std::array<float, 8> node_r{}, node_c{}, node_w{};
+  float cross = 0;
+  if (exact) {
+    for (std::size_t j = 0; j < 8; ++j) {
+      const float x = j < 4 ? -kGaussLegendreX[3 - j] : kGaussLegendreX[j - 4];
+      const float w = j < 4 ? kGaussLegendreW[3 - j] : kGaussLegendreW[j - 4];
+      const float r = 0.5f * rho * (1.0f + x);
+      node_r[j] = r;
+      node_c[j] = 1.0f / (1.0f - r * r);
+      node_w[j] = 0.63661977236758134f * 0.5f * rho * w * __builtin_sqrtf(node_c[j]);  // 2 / pi
+    }
+    cross = 1.0f / __builtin_sqrtf(1.0f - rho * rho);
+  }
   for (int i = 0; i < n; i += L) {
     const V x = load<V>(yx + i) - m.qx, y = load<V>(yy + i) - m.qy;
     const V u1 = m.c1 * x + m.s1 * y, u2 = m.c2 * x + m.s2 * y;
+    const V z1 = m.k * u1, z2 = m.k * u2;
     V e1, g1, e2, g2;
-    erf_gauss<V>(m.k * u1, e1, g1);
-    erf_gauss<V>(m.k * u2, e2, g2);
+    erf_gauss<V>(z1, e1, g1);
+    erf_gauss<V>(z2, e2, g2);
+    V s = e1 * e2;
+    if (exact) {
+      const V zz = z1 * z1 + z2 * z2, z12 = z1 * z2;
+#pragma GCC unroll 8
+      for (std::size_t j = 0; j < 8; ++j) {
+        s += node_w[j] * exp_nonpositive<V>(-((zz - (2.0f * node_r[j]) * z12) * node_c[j]));
+      }
+      V unused;
+      erf_gauss<V>((z2 - rho * z1) * cross, e2, unused);
+      erf_gauss<V>((z1 - rho * z2) * cross, e1, unused);
+    }
     store(U1 + i, u1);
     store(U2 + i, u2);
     store(E1 + i, e1);
     store(E2 + i, e2);
     store(G1 + i, g1);
     store(G2 + i, g2);
-    store(S + i, e1 * e2);
+    store(S + i, s);
   }
 }
 

@@ -58,6 +58,52 @@ TEST(SimdKernels, ErfAndGaussianMatchTheCLibrary) {
   }
 }
 
+// Edges 60 degrees apart (rho = 0.5): the shape is the exact blurred X-junction E[sign X1 sign X2]
+// (simd.hpp), here against a double-precision quadrature of P(X1 > 0, X2 > 0) over X1, and the cross
+// factors of its derivatives against the closed form erf((z2 - rho z1) / sqrt(1 - rho^2)).
+TEST(SimdKernels, NonPerpendicularEdgesGiveTheExactBlurredCorner) {
+  const double kPi = 3.14159265358979323846, rho = 0.5, k = 1.0 / std::sqrt(2.0);  // blur 1 px
+  auto Phi = [](double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); };
+  auto exact = [&](double m1, double m2) {
+    double p = 0;
+    const int steps = 4000;
+    const double lo = -m1, hi = 9.0, h = (hi - lo) / steps;
+    for (int i = 0; hi > lo && i < steps; ++i) {
+      const double z = lo + (i + 0.5) * h;
+      p += std::exp(-0.5 * z * z) / std::sqrt(2 * kPi) * Phi((m2 + rho * z) / std::sqrt(1 - rho * rho)) * h;
+    }
+    return 4 * p - 2 * Phi(m1) - 2 * Phi(m2) + 1;
+  };
+  constexpr int n = 64;
+  std::vector<float> yx(n), yy(n), U1(n), U2(n), E1(n), E2(n), G1(n), G2(n), S(n);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> pos(-4.0f, 4.0f);
+  for (int i = 0; i < n; ++i) {
+    yx[static_cast<std::size_t>(i)] = pos(rng);
+    yy[static_cast<std::size_t>(i)] = pos(rng);
+  }
+  const float c2 = 0.5f, s2 = static_cast<float>(std::sqrt(0.75));  // normal 2 at 60 degrees to normal 1
+  const simd::ModelParams m{0, 0, 1, 0, c2, s2, static_cast<float>(k), 1, 0, 0, 0, 0, 0, 0};
+  for (const ShapeFn shape : shape_kernels()) {
+    shape(m, yx.data(), yy.data(), n, U1.data(), U2.data(), E1.data(), E2.data(), G1.data(), G2.data(),
+          S.data());
+    double worst_s = 0, worst_f = 0, worst_product = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double u1 = yx[i], u2 = c2 * yx[i] + s2 * yy[i];
+      const double want = exact(u1, u2);  // m_k = u_k / blur
+      worst_s = std::max(worst_s, std::abs(S[i] - want));
+      worst_product = std::max(worst_product, std::abs(std::erf(k * u1) * std::erf(k * u2) - want));
+      const double f2 = std::erf(k * (u2 - rho * u1) / std::sqrt(1 - rho * rho));
+      worst_f = std::max(worst_f, std::abs(E2[i] - f2));
+    }
+    std::printf("rho 0.5: shape %.1e from the exact corner (the product of erfs: %.3f), cross factor %.1e\n",
+                worst_s, worst_product, worst_f);
+    EXPECT_LT(worst_s, 2e-4);        // 8-node Gauss-Legendre in float
+    EXPECT_GT(worst_product, 0.05);  // what the product of erfs would miss
+    EXPECT_LT(worst_f, 1e-6);
+  }
+}
+
 TEST(SimdKernels, NormalEquationsMatchADoubleSum) {
   constexpr int K = 9, n = 203, nv = 208;  // n not a multiple of the vector length: tails zeroed
   std::mt19937 rng(5);

@@ -177,6 +177,7 @@ class CornerDetector {
   void grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols);
   bool validate(const CornerResult& out);
   void luminance_and_noise(const RawImageView& image, int row_lo, int row_hi);
+  void mark_clipped(const RawImageView& image, int row_lo, int row_hi);
 
   CameraModel camera_;
   CornerSettings settings_;
@@ -191,6 +192,10 @@ class CornerDetector {
   int row_begin_ = 0, row_end_ = 0, col_end_ = 0;  // usable pixel area
   std::vector<float> luma_, scratch_;
   std::vector<unsigned char> gray8_;
+  // Bayer: nonzero where the luminance mixes a clipped site (LumaView::clipped); any_clipped_ false
+  // when the frame's rows have none (the fit then skips the mark).
+  std::vector<std::uint8_t> clipped_;
+  bool any_clipped_ = false;
   std::vector<Eigen::Vector2f> coarse_;
   CoarseGridFinder coarse_finder_;
   // Built once per camera (shared by copies of the detector): raw pixel -> undistorted coordinates.

@@ -24,6 +24,9 @@ struct EdgeDirections {
   Eigen::Vector2d row_n{1, 0}, col_n{0, 1};    // along the grid row / column, normalized plane
   Eigen::Vector2d row_px{1, 0}, col_px{0, 1};  // the same in raw pixels
   bool normalized_ok = false;
+  // Distance (raw px) from the corner to the next grid line parallel to the row edge and to the
+  // column edge: the window keeps those lines and their blur out (0: not known).
+  double row_line_px = 0, col_line_px = 0;
 };
 
 // Work space of one fit (~50 KB): owned by the caller and reused, so a fit allocates nothing.

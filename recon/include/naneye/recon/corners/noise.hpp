@@ -49,7 +49,14 @@ class NoiseEstimator {
 
   // The noise of `img` (w x h floats, row-major) from same-site blocks (`step` 1: mono, 2: Bayer),
   // rows [row_lo, row_hi) and columns [0, col_end). Allocates nothing.
-  NoiseModel estimate(const float* img, int w, int row_lo, int row_hi, int col_end, int step);
+  // Blocks reaching the clip of their site (`clip_dn`, indexed (row & 1) * 2 + (col & 1) for a mosaic;
+  // [0] for mono) are saturated and left out: a white-balanced mosaic's clipped sites land at
+  // (1020 - offset) / gain, under 1020 for a gain above 1.
+  NoiseModel estimate(const float* img, int w, int row_lo, int row_hi, int col_end, int step,
+                      const std::array<float, 4>& clip_dn = {kDefaultClipDn, kDefaultClipDn, kDefaultClipDn,
+                                                             kDefaultClipDn});
+  // 10-bit full scale less the quantum of 8-bit data scaled by 4: a value reaching it may be clipped.
+  static constexpr float kDefaultClipDn = 1020.0f;
 
  private:
   std::array<std::array<std::uint32_t, kDevBins>, kLevelBins> hist_{};

@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdint>
 // Sub-pixel refinement of one checkerboard corner: a least-squares fit (Levenberg-Marquardt) of a
 // blurred saddle to the pixels of a small window.
 //
@@ -51,6 +52,10 @@ struct LumaView {
   const float* data = nullptr;
   int width = 0, height = 0;
   int row_begin = 0, row_end = 0, col_end = 0;
+  // Optional, width x height: nonzero where the value mixes a clipped raw pixel (a Bayer luminance's
+  // 3 x 3 filter reaches one) and is no measure of the light; the fit leaves such pixels out, as it
+  // does any value at the clip.
+  const std::uint8_t* clipped = nullptr;
   float at(int r, int c) const { return data[r * width + c]; }
 };
 
