@@ -45,6 +45,8 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   scratch_.assign(n, 0.f);
   line_copy_.assign(n, 0.f);
   rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
+  span_lo_.assign(static_cast<std::size_t>(h_), 0);
+  span_hi_.assign(static_cast<std::size_t>(h_), 0);
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;
@@ -52,9 +54,30 @@ RectifiedMatcher::~RectifiedMatcher() = default;
 void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
                              const cv::Mat& valid_right) {
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
+  update_spans(valid_left);
   integer_stage(left, right, valid_left, valid_right);
   refine(left, right, valid_left, valid_right);
   validate(valid_left);
+}
+
+void RectifiedMatcher::update_spans(const cv::Mat& valid_left) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  for (int y = 0; y < h_; ++y) {
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    int lo = 0, hi = w_;
+    while (lo < w_ && !vl[lo]) ++lo;
+    while (hi > lo && !vl[hi - 1]) --hi;
+    if (lo == hi) lo = hi = 0;
+    const auto k = static_cast<std::size_t>(y);
+    // Another mask than the last pair's (the rig's is the same on every pair): what was written
+    // inside the old span and lies outside the new one would be read as data.
+    for (int x = span_lo_[k]; x < span_hi_[k]; ++x)
+      if (x < lo || x >= hi)
+        for (int c = 0; c < 10; ++c)
+          chan_[c * n + k * static_cast<std::size_t>(w_) + static_cast<std::size_t>(x)] = 0.f;
+    span_lo_[k] = lo;
+    span_hi_[k] = hi;
+  }
 }
 
 void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,

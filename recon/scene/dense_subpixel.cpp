@@ -28,20 +28,38 @@ constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
 
-// Sum over the (2r+1)^2 window (zero outside the image): per output row, 2r+1 input rows added into
-// one row (`tmp`, w floats, stays in the first-level cache), then 2r+1 of its columns, in float.
-// Direct sums rather than running ones: nothing drifts along a row, and every inner loop is a plain
-// array add that the compiler vectorises (the running sums' loop-carried dependency did not).
-NANEYE_VECTORISE void box_sum(const float* __restrict in, float* __restrict out, float* __restrict tmp, int w,
-                              int h, int r) {
+// The rows' spans of left data (RectifiedMatcher::span_lo_, span_hi_): the per-pixel work runs
+// only there, ~70 % of the rectified grid (its band columns and the domain disc's corners carry
+// nothing).
+struct Spans {
+  const int *lo, *hi;
+  int w, h;
+  template <class F>
+  void each(F&& f) const {
+    for (int y = 0; y < h; ++y)
+      for (int x = lo[y]; x < hi[y]; ++x) f(static_cast<std::size_t>(y) * w + x);
+  }
+};
+
+// Sum over the (2r+1)^2 window (zero outside the image), output inside the spans only (`in` is zero
+// outside them): per output row, 2r+1 input rows added into one row (`tmp`, w floats, stays in the
+// first-level cache), then 2r+1 of its columns, in float. Direct sums rather than running ones:
+// nothing drifts along a row, and every inner loop is a plain array add that the compiler
+// vectorises (the running sums' loop-carried dependency did not).
+NANEYE_VECTORISE void box_sum(const float* __restrict in, float* __restrict out, float* __restrict tmp,
+                              const Spans& sp, int r) {
+  const int w = sp.w, h = sp.h;
   const int inner0 = std::min(r, w), inner1 = std::max(inner0, w - r);
   for (int y = 0; y < h; ++y) {
+    const int lo = sp.lo[y], hi = sp.hi[y];
+    if (lo >= hi) continue;
+    const int c0 = std::max(0, lo - r), c1 = std::min(w, hi + r);
     const int y0 = std::max(0, y - r), y1 = std::min(h - 1, y + r);
     const float* first = in + static_cast<std::size_t>(y0) * w;
-    for (int x = 0; x < w; ++x) tmp[x] = first[x];
+    for (int x = c0; x < c1; ++x) tmp[x] = first[x];
     for (int yy = y0 + 1; yy <= y1; ++yy) {
       const float* a = in + static_cast<std::size_t>(yy) * w;
-      for (int x = 0; x < w; ++x) tmp[x] += a[x];
+      for (int x = c0; x < c1; ++x) tmp[x] += a[x];
     }
     float* o = out + static_cast<std::size_t>(y) * w;
     auto edge = [&](int x) {
@@ -49,24 +67,26 @@ NANEYE_VECTORISE void box_sum(const float* __restrict in, float* __restrict out,
       for (int k = std::max(0, x - r); k <= std::min(w - 1, x + r); ++k) s += tmp[k];
       o[x] = s;
     };
-    for (int x = 0; x < inner0; ++x) edge(x);
-    for (int x = inner0; x < inner1; ++x) o[x] = tmp[x - r];
+    const int i0 = std::max(lo, inner0), i1 = std::min(hi, inner1);
+    for (int x = lo; x < std::min(hi, inner0); ++x) edge(x);
+    for (int x = i0; x < i1; ++x) o[x] = tmp[x - r];
     for (int k = 1 - r; k <= r; ++k)
-      for (int x = inner0; x < inner1; ++x) o[x] += tmp[x + k];
-    for (int x = inner1; x < w; ++x) edge(x);
+      for (int x = i0; x < i1; ++x) o[x] += tmp[x + k];
+    for (int x = std::max(lo, inner1); x < hi; ++x) edge(x);
   }
 }
 
-// out += rho * z, rho over lags [-kLag, kLag]^2 (row-major), z zero outside the image: one lag at a
-// time over whole rows.
-NANEYE_VECTORISE void filter_lags(const float* __restrict z, float* __restrict out, const float* rho, int w,
-                                  int h) {
+// out += rho * z inside the spans, rho over lags [-kLag, kLag]^2 (row-major), z zero outside the
+// image and the spans: one lag at a time over whole rows.
+NANEYE_VECTORISE void filter_lags(const float* __restrict z, float* __restrict out, const float* rho,
+                                  const Spans& sp) {
   constexpr int kSide = 2 * kLag + 1;
+  const int w = sp.w, h = sp.h;
   for (int dy = -kLag; dy <= kLag; ++dy)
     for (int dx = -kLag; dx <= kLag; ++dx) {
       const float r = rho[(dy + kLag) * kSide + dx + kLag];
-      const int x0 = std::max(0, -dx), x1 = std::min(w, w - dx);
       for (int y = std::max(0, -dy); y < std::min(h, h - dy); ++y) {
+        const int x0 = std::max(sp.lo[y], -dx), x1 = std::min(sp.hi[y], w - dx);
         float* __restrict o = out + static_cast<std::size_t>(y) * w;
         const float* __restrict src = z + static_cast<std::size_t>(y + dy) * w + dx;
         for (int x = x0; x < x1; ++x) o[x] += r * src[x];
@@ -97,7 +117,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
     const float* L = left.ptr<float>(y);
     const float* R = right.ptr<float>(y);
     const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w_; ++x) {
+    for (int x = span_lo_[static_cast<std::size_t>(y)]; x < span_hi_[static_cast<std::size_t>(y)]; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
       float m = 0, W = 0, G = 0, l = 0;
       const float d = d_[i];
@@ -127,8 +147,9 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
       ch[9 * n + i] = m * l * l;
     }
   }
+  const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int k = 0; k < kChannels; ++k)
-    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), w_, h_, s_.radius);
+    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), sp, s_.radius);
 }
 
 void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
@@ -155,16 +176,17 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
   float* msolved = chan_.data() + 5 * n;
+  const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int it = 0; it < s_.iterations; ++it) {
     gather(left, right, valid_right, it + 1 == s_.iterations);
-    for (std::size_t i = 0; i < n; ++i) {
+    sp.each([&](std::size_t i) {
       const float N = S[i];
       n_[i] = N;
       mstep[i] = 0;
       msolved[i] = 0;
       if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
         d_[i] = kNoMatch;
-        continue;
+        return;
       }
       const double inv = 1.0 / N;
       const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
@@ -174,7 +196,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       const double det = Sww * Sgg - Swg * Swg;
       if (!(det > 0)) {
         d_[i] = kNoMatch;
-        continue;
+        return;
       }
       const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
       a_[i] = static_cast<float>(a);
@@ -182,11 +204,11 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
       s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
       z_[i] = static_cast<float>(Sww / det);
-      if (!(a > 0)) continue;  // anti-correlated: validate() refuses it
+      if (!(a > 0)) return;  // anti-correlated: validate() refuses it
       // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
       mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
       msolved[i] = 1;
-    }
+    });
     // The window's shape is the reference field d_ (each pixel warped by its own reference
     // disparity: slanted surfaces keep their shape), its correction the window's common step. The
     // reference becomes the window mean of the corrected disparities, never a pixel's own: fed
@@ -195,20 +217,20 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     // the integer stage's own scatter (its pixel-locked parabola) would stay in the window shape.
     const bool last = it + 1 == s_.iterations;
     if (last) {
-      for (std::size_t i = 0; i < n; ++i)
-        d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNoMatch;  // the window's estimate at the final reference
+      // The window's estimate at the final reference.
+      sp.each([&](std::size_t i) { d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNoMatch; });
       break;
     }
-    for (std::size_t i = 0; i < n; ++i) mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f;
-    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), w_, h_, s_.radius);
-    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), w_, h_, s_.radius);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!std::isfinite(d_[i])) continue;
+    sp.each([&](std::size_t i) { mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f; });
+    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
+    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
+    sp.each([&](std::size_t i) {
+      if (!std::isfinite(d_[i])) return;
       const float cnt = S[5 * n + i];
       const float next = cnt > 0 ? S[4 * n + i] / cnt : d_[i];
       smooth_step_[i] = next - d_[i];
       d_[i] = next;
-    }
+    });
   }
   correlation(valid_left);
 }
@@ -253,24 +275,26 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   float* z = chan_.data() + 4 * n;
   float* zz = chan_.data() + 6 * n;
   float* zh = chan_.data() + 7 * n;
-  for (std::size_t i = 0; i < n; ++i)
-    z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f;
+  const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
+  sp.each(
+      [&](std::size_t i) { z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f; });
   // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
   // over whole rows: plain multiply-adds the compiler vectorises.
-  for (std::size_t i = 0; i < n; ++i) {
+  sp.each([&](std::size_t i) {
     zz[i] = z[i] * z[i];
     zh[i] = 0;
-  }
-  filter_lags(z, zh, rho_.data(), w_, h_);
-  for (std::size_t i = 0; i < n; ++i) zh[i] *= z[i];
+  });
+  filter_lags(z, zh, rho_.data(), sp);
+  sp.each([&](std::size_t i) { zh[i] *= z[i]; });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
-  box_sum(zz, szz, scratch_.data(), w_, h_, s_.radius);
-  box_sum(zh, szh, scratch_.data(), w_, h_, s_.radius);
-  for (std::size_t i = 0; i < n; ++i) kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f;
+  box_sum(zz, szz, scratch_.data(), sp, s_.radius);
+  box_sum(zh, szh, scratch_.data(), sp, s_.radius);
+  sp.each([&](std::size_t i) { kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f; });
   std::size_t k = 0;
-  for (std::size_t i = 0; i < n; ++i)
+  sp.each([&](std::size_t i) {
     if (std::isfinite(d_[i]) && ch[i] > 0) line_copy_[k++] = kappa_px_[i];
+  });
   if (k > 0) {
     std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(k / 2),
                      line_copy_.begin() + static_cast<long>(k));

@@ -92,6 +92,7 @@ class RectifiedMatcher {
   void validate(const cv::Mat& valid_left);
   void gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool last);
   void correlation(const cv::Mat& valid_left);
+  void update_spans(const cv::Mat& valid_left);
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
   int bin_of(std::size_t i) const;
@@ -122,6 +123,10 @@ class RectifiedMatcher {
   std::vector<float> scratch_, line_copy_;
   double mean_ = 0;
   std::vector<float> rho_;  // the residual's autocorrelation over lags [-3, 3]^2
+  // Per rectified row, the columns [span_lo_, span_hi_) from the first to the last pixel with left
+  // data (empty: lo = hi = 0). Every per-pixel plane is written only inside them and is zero
+  // outside, so the window sums, which read across them, need no other bounds.
+  std::vector<int> span_lo_, span_hi_;
   double residual_sigma_ = 0, kappa_ = 1;
 };
 
