@@ -5,6 +5,7 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
+#include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 
@@ -47,6 +48,7 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
   span_lo_.assign(static_cast<std::size_t>(h_), 0);
   span_hi_.assign(static_cast<std::size_t>(h_), 0);
+  avx2_ = dense_simd::avx2_available();
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;

@@ -11,88 +11,16 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dense_simd.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 
 namespace naneye::recon::scene {
 namespace {
-// GCC's -O2 vectorises only loops whose trip count it knows (its "very cheap" cost model): the box
-// sums and the correlation filter, most of the sub-pixel step's time, ask for its dynamic model
-// (vector body plus a scalar remainder). Plain C++ loops either way.
-#if defined(__GNUC__) && !defined(__clang__)
-#define NANEYE_VECTORISE __attribute__((optimize("vect-cost-model=dynamic")))
-#else
-#define NANEYE_VECTORISE
-#endif
+using dense_simd::Spans;
 constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // px; the residual autocorrelation's reach: the window radius (noise correlated by Keys' 4 taps and
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
-
-// The rows' spans of left data (RectifiedMatcher::span_lo_, span_hi_): the per-pixel work runs
-// only there, ~70 % of the rectified grid (its band columns and the domain disc's corners carry
-// nothing).
-struct Spans {
-  const int *lo, *hi;
-  int w, h;
-  template <class F>
-  void each(F&& f) const {
-    for (int y = 0; y < h; ++y)
-      for (int x = lo[y]; x < hi[y]; ++x) f(static_cast<std::size_t>(y) * w + x);
-  }
-};
-
-// Sum over the (2r+1)^2 window (zero outside the image), output inside the spans only (`in` is zero
-// outside them): per output row, 2r+1 input rows added into one row (`tmp`, w floats, stays in the
-// first-level cache), then 2r+1 of its columns, in float. Direct sums rather than running ones:
-// nothing drifts along a row, and every inner loop is a plain array add that the compiler
-// vectorises (the running sums' loop-carried dependency did not).
-NANEYE_VECTORISE void box_sum(const float* __restrict in, float* __restrict out, float* __restrict tmp,
-                              const Spans& sp, int r) {
-  const int w = sp.w, h = sp.h;
-  const int inner0 = std::min(r, w), inner1 = std::max(inner0, w - r);
-  for (int y = 0; y < h; ++y) {
-    const int lo = sp.lo[y], hi = sp.hi[y];
-    if (lo >= hi) continue;
-    const int c0 = std::max(0, lo - r), c1 = std::min(w, hi + r);
-    const int y0 = std::max(0, y - r), y1 = std::min(h - 1, y + r);
-    const float* first = in + static_cast<std::size_t>(y0) * w;
-    for (int x = c0; x < c1; ++x) tmp[x] = first[x];
-    for (int yy = y0 + 1; yy <= y1; ++yy) {
-      const float* a = in + static_cast<std::size_t>(yy) * w;
-      for (int x = c0; x < c1; ++x) tmp[x] += a[x];
-    }
-    float* o = out + static_cast<std::size_t>(y) * w;
-    auto edge = [&](int x) {
-      float s = 0;
-      for (int k = std::max(0, x - r); k <= std::min(w - 1, x + r); ++k) s += tmp[k];
-      o[x] = s;
-    };
-    const int i0 = std::max(lo, inner0), i1 = std::min(hi, inner1);
-    for (int x = lo; x < std::min(hi, inner0); ++x) edge(x);
-    for (int x = i0; x < i1; ++x) o[x] = tmp[x - r];
-    for (int k = 1 - r; k <= r; ++k)
-      for (int x = i0; x < i1; ++x) o[x] += tmp[x + k];
-    for (int x = std::max(lo, inner1); x < hi; ++x) edge(x);
-  }
-}
-
-// out += rho * z inside the spans, rho over lags [-kLag, kLag]^2 (row-major), z zero outside the
-// image and the spans: one lag at a time over whole rows.
-NANEYE_VECTORISE void filter_lags(const float* __restrict z, float* __restrict out, const float* rho,
-                                  const Spans& sp) {
-  constexpr int kSide = 2 * kLag + 1;
-  const int w = sp.w, h = sp.h;
-  for (int dy = -kLag; dy <= kLag; ++dy)
-    for (int dx = -kLag; dx <= kLag; ++dx) {
-      const float r = rho[(dy + kLag) * kSide + dx + kLag];
-      for (int y = std::max(0, -dy); y < std::min(h, h - dy); ++y) {
-        const int x0 = std::max(sp.lo[y], -dx), x1 = std::min(sp.hi[y], w - dx);
-        float* __restrict o = out + static_cast<std::size_t>(y) * w;
-        const float* __restrict src = z + static_cast<std::size_t>(y + dy) * w + dx;
-        for (int x = x0; x < x1; ++x) o[x] += r * src[x];
-      }
-    }
-}
 
 // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
 // from tap 0, for taps -1, 0, 1, 2.
@@ -149,7 +77,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
   }
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int k = 0; k < kChannels; ++k)
-    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), sp, s_.radius);
+    dense_simd::box_sum(avx2_, ch + k * n, sums_.data() + k * n, scratch_.data(), sp, s_.radius);
 }
 
 void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
@@ -222,8 +150,8 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       break;
     }
     sp.each([&](std::size_t i) { mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f; });
-    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
-    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
+    dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
+    dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
     sp.each([&](std::size_t i) {
       if (!std::isfinite(d_[i])) return;
       const float cnt = S[5 * n + i];
@@ -284,12 +212,12 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     zz[i] = z[i] * z[i];
     zh[i] = 0;
   });
-  filter_lags(z, zh, rho_.data(), sp);
+  dense_simd::filter_lags(avx2_, z, zh, rho_.data(), kLag, sp);
   sp.each([&](std::size_t i) { zh[i] *= z[i]; });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
-  box_sum(zz, szz, scratch_.data(), sp, s_.radius);
-  box_sum(zh, szh, scratch_.data(), sp, s_.radius);
+  dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, s_.radius);
+  dense_simd::box_sum(avx2_, zh, szh, scratch_.data(), sp, s_.radius);
   sp.each([&](std::size_t i) { kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f; });
   std::size_t k = 0;
   sp.each([&](std::size_t i) {
@@ -303,5 +231,3 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
 }
 
 }  // namespace naneye::recon::scene
-
-#undef NANEYE_VECTORISE  // a unity build puts the next source file after this one

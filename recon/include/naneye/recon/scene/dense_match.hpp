@@ -127,6 +127,7 @@ class RectifiedMatcher {
   // data (empty: lo = hi = 0). Every per-pixel plane is written only inside them and is zero
   // outside, so the window sums, which read across them, need no other bounds.
   std::vector<int> span_lo_, span_hi_;
+  bool avx2_ = false;  // the plane kernels' 8-float versions (dense_simd.hpp)
   double residual_sigma_ = 0, kappa_ = 1;
 };
 
