@@ -49,6 +49,9 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   span_lo_.assign(static_cast<std::size_t>(h_), 0);
   span_hi_.assign(static_cast<std::size_t>(h_), 0);
   avx2_ = dense_simd::avx2_available();
+  features_.assign(2 * n, 0.f);
+  bin_.assign(n, 0);
+  taps_ok_.assign(n, 0);
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;
@@ -107,33 +110,41 @@ void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, 
 }
 
 void RectifiedMatcher::level_medians(float min_n) {
-  const std::size_t n = static_cast<std::size_t>(w_) * h_;
-  auto usable = [&](std::size_t i) { return std::isfinite(d_[i]) && n_[i] >= min_n && s2_[i] > 0; };
+  const dense_simd::Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
+  // Every window validate() may test (one log per window, not one per use) and those whose residual
+  // enters the medians.
+  auto candidate = [&](std::size_t i) { return std::isfinite(d_[i]) && n_[i] >= min_n; };
+  auto usable = [&](std::size_t i) { return candidate(i) && s2_[i] > 0; };
   float lo[2] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
   float hi[2] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest()};
-  for (std::size_t i = 0; i < n; ++i)
-    if (usable(i)) {
-      float f[2];
-      window_features(i, f);
-      for (int k = 0; k < 2; ++k) {
-        lo[k] = std::min(lo[k], f[k]);
-        hi[k] = std::max(hi[k], f[k]);
-      }
+  sp.each([&](std::size_t i) {
+    if (!candidate(i)) return;
+    float* f = &features_[2 * i];
+    window_features(i, f);
+    if (!(s2_[i] > 0)) return;
+    for (int k = 0; k < 2; ++k) {
+      lo[k] = std::min(lo[k], f[k]);
+      hi[k] = std::max(hi[k], f[k]);
     }
+  });
   for (int k = 0; k < 2; ++k) {
     bin_lo_[k] = lo[k];
     bin_step_[k] = hi[k] > lo[k] ? (hi[k] - lo[k]) / kBinsPerAxis : 1.f;
   }
   std::array<int, kBins + 1> start{};
-  for (std::size_t i = 0; i < n; ++i)
-    if (usable(i)) ++start[static_cast<std::size_t>(bin_of(i)) + 1];
+  sp.each([&](std::size_t i) {
+    if (!candidate(i)) return;
+    bin_[i] = static_cast<std::uint8_t>(bin_of(&features_[2 * i]));
+    if (s2_[i] > 0) ++start[static_cast<std::size_t>(bin_[i]) + 1];
+  });
   for (int b = 0; b < kBins; ++b) start[b + 1] += start[b];
   std::array<int, kBins> fill{};
-  for (std::size_t i = 0; i < n; ++i)
+  sp.each([&](std::size_t i) {
     if (usable(i)) {
-      const int b = bin_of(i);
+      const int b = bin_[i];
       scratch_[static_cast<std::size_t>(start[b] + fill[b]++)] = s2_[i];
     }
+  });
   for (int b = 0; b < kBins; ++b) {
     const int cnt = start[b + 1] - start[b];
     bin_median_[b] = -1;
@@ -161,9 +172,7 @@ void RectifiedMatcher::window_features(std::size_t i, float f[2]) const {
   f[1] = std::log(std::max(1e-6f, sums_[9 * n + i] / N - f[0] * f[0]));
 }
 
-int RectifiedMatcher::bin_of(std::size_t i) const {
-  float f[2];
-  window_features(i, f);
+int RectifiedMatcher::bin_of(const float f[2]) const {
   int b[2];
   for (int k = 0; k < 2; ++k)
     b[k] = std::clamp(static_cast<int>((f[k] - bin_lo_[k]) / bin_step_[k]), 0, kBinsPerAxis - 1);
@@ -171,7 +180,7 @@ int RectifiedMatcher::bin_of(std::size_t i) const {
 }
 
 double RectifiedMatcher::expected_residual(std::size_t i) const {
-  const float m = bin_median_[static_cast<std::size_t>(bin_of(i))];
+  const float m = bin_median_[bin_[i]];  // level_medians() binned every window validate() tests
   return m > 0 ? m : global_median_;
 }
 

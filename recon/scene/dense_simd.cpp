@@ -3,6 +3,7 @@
 #include "dense_simd.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "../corners/simd.hpp"
 
@@ -85,6 +86,73 @@ NANEYE_SIMD_INLINE void filter_lags_v(const float* __restrict z, float* __restri
     }
 }
 
+// Lanes of L pixels: the taps are picked per pixel (each its own position), the Keys weights and the
+// ten products computed on whole vectors, with the scalar code's expressions term by term.
+template <class V>
+NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, int x, int count, float out[10][kLanes<V>]) {
+  constexpr int L = kLanes<V>;
+  alignas(32) float T[L], R0[L], R1[L], R2[L], R3[L], Lv[L], M[L];
+  for (int j = 0; j < L; ++j) {
+    T[j] = R0[j] = R1[j] = R2[j] = R3[j] = Lv[j] = M[j] = 0.f;
+    if (j >= count) continue;
+    const float d = g.d[x + j];
+    if (!std::isfinite(d)) continue;
+    const float xs = static_cast<float>(x + j) - d;
+    const int i0 = static_cast<int>(std::floor(xs));
+    if (i0 < 1 || i0 + 2 >= g.w || !g.taps_ok[i0]) continue;
+    T[j] = xs - static_cast<float>(i0);
+    R0[j] = g.right[i0 - 1] - g.mu;
+    R1[j] = g.right[i0] - g.mu;
+    R2[j] = g.right[i0 + 1] - g.mu;
+    R3[j] = g.right[i0 + 2] - g.mu;
+    Lv[j] = g.left[x + j] - g.mu;
+    M[j] = 1.f;
+  }
+  // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
+  // from tap 0, for taps -1, 0, 1, 2.
+  const V t = load<V>(T), t2 = t * t, t3 = t2 * t;
+  const V w0 = -0.5f * t3 + t2 - 0.5f * t, w1 = 1.5f * t3 - 2.5f * t2 + 1.f;
+  const V w2 = -1.5f * t3 + 2.f * t2 + 0.5f * t, w3 = 0.5f * t3 - 0.5f * t2;
+  const V dw0 = -1.5f * t2 + 2.f * t - 0.5f, dw1 = 4.5f * t2 - 5.f * t;
+  const V dw2 = -4.5f * t2 + 4.f * t + 0.5f, dw3 = 1.5f * t2 - t;
+  const V r0 = load<V>(R0), r1 = load<V>(R1), r2 = load<V>(R2), r3 = load<V>(R3);
+  V W = V{}, G = V{};
+  W += w0 * r0;
+  W += w1 * r1;
+  W += w2 * r2;
+  W += w3 * r3;
+  G += dw0 * r0;
+  G += dw1 * r1;
+  G += dw2 * r2;
+  G += dw3 * r3;
+  const V m = load<V>(M), l = load<V>(Lv);
+  store(out[0], m);
+  store(out[1], m * W);
+  store(out[2], m * l);
+  store(out[3], m * G);
+  store(out[4], m * W * W);
+  store(out[5], m * G * G);
+  store(out[6], m * W * G);
+  store(out[7], m * W * l);
+  store(out[8], m * G * l);
+  store(out[9], m * l * l);
+}
+
+template <class V>
+NANEYE_SIMD_INLINE void gather_row_v(const GatherRow& g) {
+  constexpr int L = kLanes<V>;
+  alignas(32) float out[10][L];
+  for (int x = g.lo; x < g.hi; x += L) {
+    const int count = std::min(L, g.hi - x);
+    gather_block<V>(g, x, count, out);
+    for (int c = 0; c < 10; ++c)
+      if (count == L)
+        store(g.ch[c] + x, load<V>(out[c]));
+      else
+        for (int j = 0; j < count; ++j) g.ch[c][x + j] = out[c][j];
+  }
+}
+
 void box_sum_sse(const float* in, float* out, float* tmp, const Spans& sp, int r) {
   box_sum_v<simd::V4>(in, out, tmp, sp, r);
 }
@@ -99,6 +167,12 @@ __attribute__((target("avx2"))) void filter_lags_avx2(const float* z, float* out
                                                       const Spans& sp) {
   filter_lags_v<simd::V8>(z, out, rho, lag, sp);
 }
+void gather_row_sse(const GatherRow& g) {
+  gather_row_v<simd::V4>(g);
+}
+__attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& g) {
+  gather_row_v<simd::V8>(g);
+}
 }  // namespace
 
 bool avx2_available() {
@@ -111,6 +185,10 @@ void box_sum(bool avx2, const float* in, float* out, float* tmp, const Spans& sp
 
 void filter_lags(bool avx2, const float* z, float* out, const float* rho, int lag, const Spans& sp) {
   (avx2 ? filter_lags_avx2 : filter_lags_sse)(z, out, rho, lag, sp);
+}
+
+void gather_row(bool avx2, const GatherRow& g) {
+  (avx2 ? gather_row_avx2 : gather_row_sse)(g);
 }
 
 }  // namespace naneye::recon::scene::dense_simd

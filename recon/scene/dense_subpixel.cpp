@@ -22,58 +22,24 @@ constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
 
-// Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
-// from tap 0, for taps -1, 0, 1, 2.
-inline void keys(float t, float w[4], float dw[4]) {
-  const float t2 = t * t, t3 = t2 * t;
-  w[0] = -0.5f * t3 + t2 - 0.5f * t;
-  w[1] = 1.5f * t3 - 2.5f * t2 + 1;
-  w[2] = -1.5f * t3 + 2 * t2 + 0.5f * t;
-  w[3] = 0.5f * t3 - 0.5f * t2;
-  dw[0] = -1.5f * t2 + 2 * t - 0.5f;
-  dw[1] = 4.5f * t2 - 5 * t;
-  dw[2] = -4.5f * t2 + 4 * t + 0.5f;
-  dw[3] = 1.5f * t2 - t;
-}
 }  // namespace
 
-void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool) {
+void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat&, bool) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   float* ch = chan_.data();
-  const float mu = static_cast<float>(mean_);
+  dense_simd::GatherRow g{};
+  g.w = w_;
+  g.mu = static_cast<float>(mean_);
   for (int y = 0; y < h_; ++y) {
-    const float* L = left.ptr<float>(y);
-    const float* R = right.ptr<float>(y);
-    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
-    for (int x = span_lo_[static_cast<std::size_t>(y)]; x < span_hi_[static_cast<std::size_t>(y)]; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
-      float m = 0, W = 0, G = 0, l = 0;
-      const float d = d_[i];
-      if (std::isfinite(d)) {
-        const float xs = static_cast<float>(x) - d;
-        const int i0 = static_cast<int>(std::floor(xs));
-        if (i0 >= 1 && i0 + 2 < w_ && vr[i0 - 1] && vr[i0] && vr[i0 + 1] && vr[i0 + 2]) {
-          float wk[4], dk[4];
-          keys(xs - static_cast<float>(i0), wk, dk);
-          for (int k = 0; k < 4; ++k) {
-            W += wk[k] * (R[i0 - 1 + k] - mu);
-            G += dk[k] * (R[i0 - 1 + k] - mu);
-          }
-          l = L[x] - mu;
-          m = 1;
-        }
-      }
-      ch[0 * n + i] = m;
-      ch[1 * n + i] = m * W;
-      ch[2 * n + i] = m * l;
-      ch[3 * n + i] = m * G;
-      ch[4 * n + i] = m * W * W;
-      ch[5 * n + i] = m * G * G;
-      ch[6 * n + i] = m * W * G;
-      ch[7 * n + i] = m * W * l;
-      ch[8 * n + i] = m * G * l;
-      ch[9 * n + i] = m * l * l;
-    }
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    g.left = left.ptr<float>(y);
+    g.right = right.ptr<float>(y);
+    g.taps_ok = taps_ok_.data() + row;
+    g.d = d_.data() + row;
+    for (int k = 0; k < kChannels; ++k) g.ch[k] = ch + static_cast<std::size_t>(k) * n + row;
+    g.lo = span_lo_[static_cast<std::size_t>(y)];
+    g.hi = span_hi_[static_cast<std::size_t>(y)];
+    dense_simd::gather_row(avx2_, g);
   }
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int k = 0; k < kChannels; ++k)
@@ -100,6 +66,13 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     const float* sg = integer_.ptr<float>(y);
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
     for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNoMatch;
+  }
+  // Right pixels whose four cubic taps all lie inside the right's valid domain (gather's test).
+  for (int y = 0; y < h_; ++y) {
+    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
+    std::uint8_t* ok = taps_ok_.data() + static_cast<std::size_t>(y) * w_;
+    for (int x = 0; x < w_; ++x)
+      ok[x] = x >= 1 && x + 2 < w_ && vr[x - 1] && vr[x] && vr[x + 1] && vr[x + 2] ? 1 : 0;
   }
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
