@@ -8,9 +8,18 @@
 #include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
+#include "select.hpp"
 
 namespace naneye::recon::scene {
 namespace {
+
+// std::lround for |v| < 2^23 (half away from zero), without the library call: v minus its
+// truncation is exact in float.
+inline int round_half_away(float v) {
+  const int i = static_cast<int>(v);
+  const float f = v - static_cast<float>(i);
+  return i + (f >= 0.5f) - (f <= -0.5f);
+}
 
 cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
   // P1, P2: the penalties OpenCV documents for 8-bit images (8 and 32 x channels x block area);
@@ -157,8 +166,8 @@ void RectifiedMatcher::level_medians(float min_n) {
   residual_sigma_ = 0;
   global_median_ = std::numeric_limits<double>::infinity();
   if (all > 0) {
-    std::nth_element(scratch_.begin(), scratch_.begin() + all / 2, scratch_.begin() + all);
-    global_median_ = scratch_[static_cast<std::size_t>(all / 2)];
+    global_median_ = kth_smallest(scratch_.data(), static_cast<std::size_t>(all),
+                                  static_cast<std::size_t>(all / 2), select_hist_);
     residual_sigma_ = std::sqrt(global_median_);
   }
 }
@@ -250,12 +259,12 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
     std::fill(best, best + w_, -1.f);
     for (int x = 0; x < w_; ++x) {
       if (!std::isfinite(od[x])) continue;
-      const int xr = static_cast<int>(std::lround(x - od[x]));
+      const int xr = round_half_away(static_cast<float>(x) - od[x]);
       if (xr >= 0 && xr < w_) best[xr] = std::max(best[xr], od[x]);
     }
     for (int x = 0; x < w_; ++x) {
       if (!std::isfinite(od[x])) continue;
-      const int xr = static_cast<int>(std::lround(x - od[x]));
+      const int xr = round_half_away(static_cast<float>(x) - od[x]);
       if (xr < 0 || xr >= w_ || best[xr] > od[x] + s_.occlusion_px) {
         ++c.occluded;
         od[x] = kNoMatch;

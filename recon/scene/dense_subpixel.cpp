@@ -13,6 +13,7 @@
 
 #include "dense_simd.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
+#include "select.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -147,9 +148,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     if (ch[i] > 0 && std::isfinite(d_[i])) line_copy_[m++] = s2_[i];
   double med = 0;
   if (m > 0) {
-    std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(m / 2),
-                     line_copy_.begin() + static_cast<long>(m));
-    med = line_copy_[m / 2];
+    med = kth_smallest(line_copy_.data(), m, m / 2, select_hist_);
   }
   for (std::size_t i = 0; i < n; ++i) {
     // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
@@ -197,9 +196,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     if (std::isfinite(d_[i]) && ch[i] > 0) line_copy_[k++] = kappa_px_[i];
   });
   if (k > 0) {
-    std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(k / 2),
-                     line_copy_.begin() + static_cast<long>(k));
-    kappa_ = line_copy_[k / 2];
+    kappa_ = kth_smallest(line_copy_.data(), k, k / 2, select_hist_);
   }
 }
 

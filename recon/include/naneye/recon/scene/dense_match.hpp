@@ -131,7 +131,8 @@ class RectifiedMatcher {
   // outside, so the window sums, which read across them, need no other bounds.
   std::vector<int> span_lo_, span_hi_;
   std::vector<std::uint8_t> taps_ok_;  // right pixels whose 4 cubic taps are all valid
-  bool avx2_ = false;                  // the plane kernels' 8-float versions (dense_simd.hpp)
+  bool avx2_ = false;  // the plane kernels' 8-float versions (dense_simd.hpp)
+  std::array<std::uint32_t, 4096> select_hist_{};  // the medians' counts (scene/select.hpp)
   double residual_sigma_ = 0, kappa_ = 1;
 };
 
