@@ -25,7 +25,7 @@ constexpr int kLag = 3;
 
 }  // namespace
 
-void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat&, bool) {
+void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat&, bool last) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   float* ch = chan_.data();
   dense_simd::GatherRow g{};
@@ -43,7 +43,8 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
     dense_simd::gather_row(avx2_, g);
   }
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  for (int k = 0; k < kChannels; ++k)
+  // The left's own energy (LL) enters only the last fit's residual and the window features.
+  for (int k = 0; k < (last ? kChannels : kChannels - 1); ++k)
     dense_simd::box_sum(avx2_, ch + k * n, sums_.data() + k * n, scratch_.data(), sp, s_.radius);
 }
 
@@ -81,9 +82,13 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int it = 0; it < s_.iterations; ++it) {
     gather(left, right, valid_right, it + 1 == s_.iterations);
+    // Only the last iteration's fit is read after the loop (validate(), correlation()): a window that
+    // survives it is refitted there, one that fails it has no disparity. The earlier iterations
+    // keep only the step (two of the six divisions saved).
+    const bool last = it + 1 == s_.iterations;
     sp.each([&](std::size_t i) {
       const float N = S[i];
-      n_[i] = N;
+      if (last) n_[i] = N;
       mstep[i] = 0;
       msolved[i] = 0;
       if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
@@ -94,18 +99,21 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
       const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
       const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
-      const double Sgl = S[8 * n + i] - sgr * sl * inv, Sll = S[9 * n + i] - sl * sl * inv;
+      const double Sgl = S[8 * n + i] - sgr * sl * inv;
       const double det = Sww * Sgg - Swg * Swg;
       if (!(det > 0)) {
         d_[i] = kNoMatch;
         return;
       }
       const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
-      a_[i] = static_cast<float>(a);
-      c_[i] = static_cast<float>(c);
-      b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
-      s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
-      z_[i] = static_cast<float>(Sww / det);
+      if (last) {
+        const double Sll = S[9 * n + i] - sl * sl * inv;
+        a_[i] = static_cast<float>(a);
+        c_[i] = static_cast<float>(c);
+        b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
+        s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
+        z_[i] = static_cast<float>(Sww / det);
+      }
       if (!(a > 0)) return;  // anti-correlated: validate() refuses it
       // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
       mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
@@ -117,7 +125,6 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     // back per pixel, the fixed point would be every pixel matched alone (box(G r) = 0 everywhere
     // is solved by r = 0 per pixel), the window's averaging undone and the noise amplified; and
     // the integer stage's own scatter (its pixel-locked parabola) would stay in the window shape.
-    const bool last = it + 1 == s_.iterations;
     if (last) {
       // The window's estimate at the final reference.
       sp.each([&](std::size_t i) { d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNoMatch; });
