@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "dense_rectify.hpp"
+#include "select.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -70,6 +71,7 @@ struct DenseReconstructor::Impl {
   std::vector<std::uint8_t> visible;
   int visible_count = 0;
   std::vector<float> depths;  // scratch of the median
+  SelectHistogram hist;
 };
 
 DenseReconstructor::DenseReconstructor(const StereoRig& rig, const DenseSettings& s)
@@ -140,9 +142,7 @@ void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out) {
   out.valid_share = out.visible_count > 0 ? static_cast<double>(out.valid_count) / out.visible_count : 0.0;
   out.median_mm = std::numeric_limits<double>::quiet_NaN();
   if (!m.depths.empty()) {
-    auto mid = m.depths.begin() + static_cast<long>(m.depths.size() / 2);
-    std::nth_element(m.depths.begin(), mid, m.depths.end());
-    out.median_mm = *mid;
+    out.median_mm = kth_smallest(m.depths.data(), m.depths.size(), m.depths.size() / 2, m.hist);
   }
 }
 

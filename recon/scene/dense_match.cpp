@@ -5,11 +5,21 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
+#include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
+#include "select.hpp"
 
 namespace naneye::recon::scene {
 namespace {
+
+// std::lround for |v| < 2^23 (half away from zero), without the library call: v minus its
+// truncation is exact in float.
+inline int round_half_away(float v) {
+  const int i = static_cast<int>(v);
+  const float f = v - static_cast<float>(i);
+  return i + (f >= 0.5f) - (f <= -0.5f);
+}
 
 cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
   // P1, P2: the penalties OpenCV documents for 8-bit images (8 and 32 x channels x block area);
@@ -45,6 +55,12 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   scratch_.assign(n, 0.f);
   line_copy_.assign(n, 0.f);
   rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
+  span_lo_.assign(static_cast<std::size_t>(h_), 0);
+  span_hi_.assign(static_cast<std::size_t>(h_), 0);
+  avx2_ = dense_simd::avx2_available();
+  features_.assign(2 * n, 0.f);
+  bin_.assign(n, 0);
+  taps_ok_.assign(n, 0);
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;
@@ -52,9 +68,30 @@ RectifiedMatcher::~RectifiedMatcher() = default;
 void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
                              const cv::Mat& valid_right) {
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
+  update_spans(valid_left);
   integer_stage(left, right, valid_left, valid_right);
   refine(left, right, valid_left, valid_right);
   validate(valid_left);
+}
+
+void RectifiedMatcher::update_spans(const cv::Mat& valid_left) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  for (int y = 0; y < h_; ++y) {
+    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
+    int lo = 0, hi = w_;
+    while (lo < w_ && !vl[lo]) ++lo;
+    while (hi > lo && !vl[hi - 1]) --hi;
+    if (lo == hi) lo = hi = 0;
+    const auto k = static_cast<std::size_t>(y);
+    // Another mask than the last pair's (the rig's is the same on every pair): what was written
+    // inside the old span and lies outside the new one would be read as data.
+    for (int x = span_lo_[k]; x < span_hi_[k]; ++x)
+      if (x < lo || x >= hi)
+        for (int c = 0; c < 10; ++c)
+          chan_[c * n + k * static_cast<std::size_t>(w_) + static_cast<std::size_t>(x)] = 0.f;
+    span_lo_[k] = lo;
+    span_hi_[k] = hi;
+  }
 }
 
 void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
@@ -82,33 +119,41 @@ void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, 
 }
 
 void RectifiedMatcher::level_medians(float min_n) {
-  const std::size_t n = static_cast<std::size_t>(w_) * h_;
-  auto usable = [&](std::size_t i) { return std::isfinite(d_[i]) && n_[i] >= min_n && s2_[i] > 0; };
+  const dense_simd::Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
+  // Every window validate() may test (one log per window, not one per use) and those whose residual
+  // enters the medians.
+  auto candidate = [&](std::size_t i) { return std::isfinite(d_[i]) && n_[i] >= min_n; };
+  auto usable = [&](std::size_t i) { return candidate(i) && s2_[i] > 0; };
   float lo[2] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
   float hi[2] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest()};
-  for (std::size_t i = 0; i < n; ++i)
-    if (usable(i)) {
-      float f[2];
-      window_features(i, f);
-      for (int k = 0; k < 2; ++k) {
-        lo[k] = std::min(lo[k], f[k]);
-        hi[k] = std::max(hi[k], f[k]);
-      }
+  sp.each([&](std::size_t i) {
+    if (!candidate(i)) return;
+    float* f = &features_[2 * i];
+    window_features(i, f);
+    if (!(s2_[i] > 0)) return;
+    for (int k = 0; k < 2; ++k) {
+      lo[k] = std::min(lo[k], f[k]);
+      hi[k] = std::max(hi[k], f[k]);
     }
+  });
   for (int k = 0; k < 2; ++k) {
     bin_lo_[k] = lo[k];
     bin_step_[k] = hi[k] > lo[k] ? (hi[k] - lo[k]) / kBinsPerAxis : 1.f;
   }
   std::array<int, kBins + 1> start{};
-  for (std::size_t i = 0; i < n; ++i)
-    if (usable(i)) ++start[static_cast<std::size_t>(bin_of(i)) + 1];
+  sp.each([&](std::size_t i) {
+    if (!candidate(i)) return;
+    bin_[i] = static_cast<std::uint8_t>(bin_of(&features_[2 * i]));
+    if (s2_[i] > 0) ++start[static_cast<std::size_t>(bin_[i]) + 1];
+  });
   for (int b = 0; b < kBins; ++b) start[b + 1] += start[b];
   std::array<int, kBins> fill{};
-  for (std::size_t i = 0; i < n; ++i)
+  sp.each([&](std::size_t i) {
     if (usable(i)) {
-      const int b = bin_of(i);
+      const int b = bin_[i];
       scratch_[static_cast<std::size_t>(start[b] + fill[b]++)] = s2_[i];
     }
+  });
   for (int b = 0; b < kBins; ++b) {
     const int cnt = start[b + 1] - start[b];
     bin_median_[b] = -1;
@@ -121,8 +166,8 @@ void RectifiedMatcher::level_medians(float min_n) {
   residual_sigma_ = 0;
   global_median_ = std::numeric_limits<double>::infinity();
   if (all > 0) {
-    std::nth_element(scratch_.begin(), scratch_.begin() + all / 2, scratch_.begin() + all);
-    global_median_ = scratch_[static_cast<std::size_t>(all / 2)];
+    global_median_ = kth_smallest(scratch_.data(), static_cast<std::size_t>(all),
+                                  static_cast<std::size_t>(all / 2), select_hist_);
     residual_sigma_ = std::sqrt(global_median_);
   }
 }
@@ -136,9 +181,7 @@ void RectifiedMatcher::window_features(std::size_t i, float f[2]) const {
   f[1] = std::log(std::max(1e-6f, sums_[9 * n + i] / N - f[0] * f[0]));
 }
 
-int RectifiedMatcher::bin_of(std::size_t i) const {
-  float f[2];
-  window_features(i, f);
+int RectifiedMatcher::bin_of(const float f[2]) const {
   int b[2];
   for (int k = 0; k < 2; ++k)
     b[k] = std::clamp(static_cast<int>((f[k] - bin_lo_[k]) / bin_step_[k]), 0, kBinsPerAxis - 1);
@@ -146,7 +189,7 @@ int RectifiedMatcher::bin_of(std::size_t i) const {
 }
 
 double RectifiedMatcher::expected_residual(std::size_t i) const {
-  const float m = bin_median_[static_cast<std::size_t>(bin_of(i))];
+  const float m = bin_median_[bin_[i]];  // level_medians() binned every window validate() tests
   return m > 0 ? m : global_median_;
 }
 
@@ -216,12 +259,12 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
     std::fill(best, best + w_, -1.f);
     for (int x = 0; x < w_; ++x) {
       if (!std::isfinite(od[x])) continue;
-      const int xr = static_cast<int>(std::lround(x - od[x]));
+      const int xr = round_half_away(static_cast<float>(x) - od[x]);
       if (xr >= 0 && xr < w_) best[xr] = std::max(best[xr], od[x]);
     }
     for (int x = 0; x < w_; ++x) {
       if (!std::isfinite(od[x])) continue;
-      const int xr = static_cast<int>(std::lround(x - od[x]));
+      const int xr = round_half_away(static_cast<float>(x) - od[x]);
       if (xr < 0 || xr >= w_ || best[xr] > od[x] + s_.occlusion_px) {
         ++c.occluded;
         od[x] = kNoMatch;

@@ -11,124 +11,41 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dense_simd.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
+#include "select.hpp"
 
 namespace naneye::recon::scene {
 namespace {
-// GCC's -O2 vectorises only loops whose trip count it knows (its "very cheap" cost model): the box
-// sums and the correlation filter, most of the sub-pixel step's time, ask for its dynamic model
-// (vector body plus a scalar remainder). Plain C++ loops either way.
-#if defined(__GNUC__) && !defined(__clang__)
-#define NANEYE_VECTORISE __attribute__((optimize("vect-cost-model=dynamic")))
-#else
-#define NANEYE_VECTORISE
-#endif
+using dense_simd::Spans;
 constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // px; the residual autocorrelation's reach: the window radius (noise correlated by Keys' 4 taps and
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
 
-// Sum over the (2r+1)^2 window (zero outside the image): per output row, 2r+1 input rows added into
-// one row (`tmp`, w floats, stays in the first-level cache), then 2r+1 of its columns, in float.
-// Direct sums rather than running ones: nothing drifts along a row, and every inner loop is a plain
-// array add that the compiler vectorises (the running sums' loop-carried dependency did not).
-NANEYE_VECTORISE void box_sum(const float* __restrict in, float* __restrict out, float* __restrict tmp, int w,
-                              int h, int r) {
-  const int inner0 = std::min(r, w), inner1 = std::max(inner0, w - r);
-  for (int y = 0; y < h; ++y) {
-    const int y0 = std::max(0, y - r), y1 = std::min(h - 1, y + r);
-    const float* first = in + static_cast<std::size_t>(y0) * w;
-    for (int x = 0; x < w; ++x) tmp[x] = first[x];
-    for (int yy = y0 + 1; yy <= y1; ++yy) {
-      const float* a = in + static_cast<std::size_t>(yy) * w;
-      for (int x = 0; x < w; ++x) tmp[x] += a[x];
-    }
-    float* o = out + static_cast<std::size_t>(y) * w;
-    auto edge = [&](int x) {
-      float s = 0;
-      for (int k = std::max(0, x - r); k <= std::min(w - 1, x + r); ++k) s += tmp[k];
-      o[x] = s;
-    };
-    for (int x = 0; x < inner0; ++x) edge(x);
-    for (int x = inner0; x < inner1; ++x) o[x] = tmp[x - r];
-    for (int k = 1 - r; k <= r; ++k)
-      for (int x = inner0; x < inner1; ++x) o[x] += tmp[x + k];
-    for (int x = inner1; x < w; ++x) edge(x);
-  }
-}
-
-// out += rho * z, rho over lags [-kLag, kLag]^2 (row-major), z zero outside the image: one lag at a
-// time over whole rows.
-NANEYE_VECTORISE void filter_lags(const float* __restrict z, float* __restrict out, const float* rho, int w,
-                                  int h) {
-  constexpr int kSide = 2 * kLag + 1;
-  for (int dy = -kLag; dy <= kLag; ++dy)
-    for (int dx = -kLag; dx <= kLag; ++dx) {
-      const float r = rho[(dy + kLag) * kSide + dx + kLag];
-      const int x0 = std::max(0, -dx), x1 = std::min(w, w - dx);
-      for (int y = std::max(0, -dy); y < std::min(h, h - dy); ++y) {
-        float* __restrict o = out + static_cast<std::size_t>(y) * w;
-        const float* __restrict src = z + static_cast<std::size_t>(y + dy) * w + dx;
-        for (int x = x0; x < x1; ++x) o[x] += r * src[x];
-      }
-    }
-}
-
-// Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
-// from tap 0, for taps -1, 0, 1, 2.
-inline void keys(float t, float w[4], float dw[4]) {
-  const float t2 = t * t, t3 = t2 * t;
-  w[0] = -0.5f * t3 + t2 - 0.5f * t;
-  w[1] = 1.5f * t3 - 2.5f * t2 + 1;
-  w[2] = -1.5f * t3 + 2 * t2 + 0.5f * t;
-  w[3] = 0.5f * t3 - 0.5f * t2;
-  dw[0] = -1.5f * t2 + 2 * t - 0.5f;
-  dw[1] = 4.5f * t2 - 5 * t;
-  dw[2] = -4.5f * t2 + 4 * t + 0.5f;
-  dw[3] = 1.5f * t2 - t;
-}
 }  // namespace
 
-void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool) {
+void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat&, bool last) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   float* ch = chan_.data();
-  const float mu = static_cast<float>(mean_);
+  dense_simd::GatherRow g{};
+  g.w = w_;
+  g.mu = static_cast<float>(mean_);
   for (int y = 0; y < h_; ++y) {
-    const float* L = left.ptr<float>(y);
-    const float* R = right.ptr<float>(y);
-    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w_; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * w_ + x;
-      float m = 0, W = 0, G = 0, l = 0;
-      const float d = d_[i];
-      if (std::isfinite(d)) {
-        const float xs = static_cast<float>(x) - d;
-        const int i0 = static_cast<int>(std::floor(xs));
-        if (i0 >= 1 && i0 + 2 < w_ && vr[i0 - 1] && vr[i0] && vr[i0 + 1] && vr[i0 + 2]) {
-          float wk[4], dk[4];
-          keys(xs - static_cast<float>(i0), wk, dk);
-          for (int k = 0; k < 4; ++k) {
-            W += wk[k] * (R[i0 - 1 + k] - mu);
-            G += dk[k] * (R[i0 - 1 + k] - mu);
-          }
-          l = L[x] - mu;
-          m = 1;
-        }
-      }
-      ch[0 * n + i] = m;
-      ch[1 * n + i] = m * W;
-      ch[2 * n + i] = m * l;
-      ch[3 * n + i] = m * G;
-      ch[4 * n + i] = m * W * W;
-      ch[5 * n + i] = m * G * G;
-      ch[6 * n + i] = m * W * G;
-      ch[7 * n + i] = m * W * l;
-      ch[8 * n + i] = m * G * l;
-      ch[9 * n + i] = m * l * l;
-    }
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    g.left = left.ptr<float>(y);
+    g.right = right.ptr<float>(y);
+    g.taps_ok = taps_ok_.data() + row;
+    g.d = d_.data() + row;
+    for (int k = 0; k < kChannels; ++k) g.ch[k] = ch + static_cast<std::size_t>(k) * n + row;
+    g.lo = span_lo_[static_cast<std::size_t>(y)];
+    g.hi = span_hi_[static_cast<std::size_t>(y)];
+    dense_simd::gather_row(avx2_, g);
   }
-  for (int k = 0; k < kChannels; ++k)
-    box_sum(ch + k * n, sums_.data() + k * n, scratch_.data(), w_, h_, s_.radius);
+  const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
+  // The left's own energy (LL) enters only the last fit's residual and the window features.
+  for (int k = 0; k < (last ? kChannels : kChannels - 1); ++k)
+    dense_simd::box_sum(avx2_, ch + k * n, sums_.data() + k * n, scratch_.data(), sp, s_.radius);
 }
 
 void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
@@ -152,63 +69,77 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
     for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNoMatch;
   }
+  // Right pixels whose four cubic taps all lie inside the right's valid domain (gather's test).
+  for (int y = 0; y < h_; ++y) {
+    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
+    std::uint8_t* ok = taps_ok_.data() + static_cast<std::size_t>(y) * w_;
+    for (int x = 0; x < w_; ++x)
+      ok[x] = x >= 1 && x + 2 < w_ && vr[x - 1] && vr[x] && vr[x + 1] && vr[x + 2] ? 1 : 0;
+  }
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
   float* msolved = chan_.data() + 5 * n;
+  const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int it = 0; it < s_.iterations; ++it) {
     gather(left, right, valid_right, it + 1 == s_.iterations);
-    for (std::size_t i = 0; i < n; ++i) {
+    // Only the last iteration's fit is read after the loop (validate(), correlation()): a window that
+    // survives it is refitted there, one that fails it has no disparity. The earlier iterations
+    // keep only the step (two of the six divisions saved).
+    const bool last = it + 1 == s_.iterations;
+    sp.each([&](std::size_t i) {
       const float N = S[i];
-      n_[i] = N;
+      if (last) n_[i] = N;
       mstep[i] = 0;
       msolved[i] = 0;
       if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
         d_[i] = kNoMatch;
-        continue;
+        return;
       }
       const double inv = 1.0 / N;
       const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
       const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
       const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
-      const double Sgl = S[8 * n + i] - sgr * sl * inv, Sll = S[9 * n + i] - sl * sl * inv;
+      const double Sgl = S[8 * n + i] - sgr * sl * inv;
       const double det = Sww * Sgg - Swg * Swg;
       if (!(det > 0)) {
         d_[i] = kNoMatch;
-        continue;
+        return;
       }
       const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
-      a_[i] = static_cast<float>(a);
-      c_[i] = static_cast<float>(c);
-      b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
-      s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
-      z_[i] = static_cast<float>(Sww / det);
-      if (!(a > 0)) continue;  // anti-correlated: validate() refuses it
+      if (last) {
+        const double Sll = S[9 * n + i] - sl * sl * inv;
+        a_[i] = static_cast<float>(a);
+        c_[i] = static_cast<float>(c);
+        b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
+        s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
+        z_[i] = static_cast<float>(Sww / det);
+      }
+      if (!(a > 0)) return;  // anti-correlated: validate() refuses it
       // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
       mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
       msolved[i] = 1;
-    }
+    });
     // The window's shape is the reference field d_ (each pixel warped by its own reference
     // disparity: slanted surfaces keep their shape), its correction the window's common step. The
     // reference becomes the window mean of the corrected disparities, never a pixel's own: fed
     // back per pixel, the fixed point would be every pixel matched alone (box(G r) = 0 everywhere
     // is solved by r = 0 per pixel), the window's averaging undone and the noise amplified; and
     // the integer stage's own scatter (its pixel-locked parabola) would stay in the window shape.
-    const bool last = it + 1 == s_.iterations;
     if (last) {
-      for (std::size_t i = 0; i < n; ++i)
-        d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNoMatch;  // the window's estimate at the final reference
+      // The window's estimate at the final reference.
+      sp.each([&](std::size_t i) { d_[i] = msolved[i] > 0 ? d_[i] + mstep[i] : kNoMatch; });
       break;
     }
-    for (std::size_t i = 0; i < n; ++i) mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f;
-    box_sum(mstep, sums_.data() + 4 * n, scratch_.data(), w_, h_, s_.radius);
-    box_sum(msolved, sums_.data() + 5 * n, scratch_.data(), w_, h_, s_.radius);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!std::isfinite(d_[i])) continue;
+    sp.each([&](std::size_t i) { mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f; });
+    dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
+    dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
+    sp.each([&](std::size_t i) {
+      if (!std::isfinite(d_[i])) return;
       const float cnt = S[5 * n + i];
       const float next = cnt > 0 ? S[4 * n + i] / cnt : d_[i];
       smooth_step_[i] = next - d_[i];
       d_[i] = next;
-    }
+    });
   }
   correlation(valid_left);
 }
@@ -224,9 +155,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     if (ch[i] > 0 && std::isfinite(d_[i])) line_copy_[m++] = s2_[i];
   double med = 0;
   if (m > 0) {
-    std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(m / 2),
-                     line_copy_.begin() + static_cast<long>(m));
-    med = line_copy_[m / 2];
+    med = kth_smallest(line_copy_.data(), m, m / 2, select_hist_);
   }
   for (std::size_t i = 0; i < n; ++i) {
     // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
@@ -253,31 +182,29 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   float* z = chan_.data() + 4 * n;
   float* zz = chan_.data() + 6 * n;
   float* zh = chan_.data() + 7 * n;
-  for (std::size_t i = 0; i < n; ++i)
-    z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f;
+  const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
+  sp.each(
+      [&](std::size_t i) { z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f; });
   // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
   // over whole rows: plain multiply-adds the compiler vectorises.
-  for (std::size_t i = 0; i < n; ++i) {
+  sp.each([&](std::size_t i) {
     zz[i] = z[i] * z[i];
     zh[i] = 0;
-  }
-  filter_lags(z, zh, rho_.data(), w_, h_);
-  for (std::size_t i = 0; i < n; ++i) zh[i] *= z[i];
+  });
+  dense_simd::filter_lags(avx2_, z, zh, rho_.data(), kLag, sp);
+  sp.each([&](std::size_t i) { zh[i] *= z[i]; });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
-  box_sum(zz, szz, scratch_.data(), w_, h_, s_.radius);
-  box_sum(zh, szh, scratch_.data(), w_, h_, s_.radius);
-  for (std::size_t i = 0; i < n; ++i) kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f;
+  dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, s_.radius);
+  dense_simd::box_sum(avx2_, zh, szh, scratch_.data(), sp, s_.radius);
+  sp.each([&](std::size_t i) { kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f; });
   std::size_t k = 0;
-  for (std::size_t i = 0; i < n; ++i)
+  sp.each([&](std::size_t i) {
     if (std::isfinite(d_[i]) && ch[i] > 0) line_copy_[k++] = kappa_px_[i];
+  });
   if (k > 0) {
-    std::nth_element(line_copy_.begin(), line_copy_.begin() + static_cast<long>(k / 2),
-                     line_copy_.begin() + static_cast<long>(k));
-    kappa_ = line_copy_[k / 2];
+    kappa_ = kth_smallest(line_copy_.data(), k, k / 2, select_hist_);
   }
 }
 
 }  // namespace naneye::recon::scene
-
-#undef NANEYE_VECTORISE  // a unity build puts the next source file after this one

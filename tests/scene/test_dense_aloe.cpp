@@ -110,5 +110,38 @@ TEST(DenseAloe, MatcherNoWorseThanSgbm) {
   }
 }
 
+// The matcher works only on the rows' spans of left data and keeps its planes zero outside them
+// (dense_match.hpp): one reused on another mask must give what a fresh one gives.
+TEST(DenseAloe, MatcherReusedOnAnotherMaskGivesAFreshOnesResult) {
+  if (!std::filesystem::exists(kAloe / "aloeL.jpg")) GTEST_SKIP() << "opencv-doc is not installed";
+  cv::Mat l, r, lf, rf;
+  cv::resize(cv::imread((kAloe / "aloeL.jpg").string(), cv::IMREAD_GRAYSCALE), l, cv::Size(), 0.25, 0.25,
+             cv::INTER_AREA);
+  cv::resize(cv::imread((kAloe / "aloeR.jpg").string(), cv::IMREAD_GRAYSCALE), r, cv::Size(), 0.25, 0.25,
+             cv::INTER_AREA);
+  ASSERT_FALSE(l.empty() || r.empty());
+  l.convertTo(lf, CV_32F);
+  r.convertTo(rf, CV_32F);
+  const cv::Mat all(l.rows, l.cols, CV_8UC1, cv::Scalar(1));
+  cv::Mat disc = cv::Mat::zeros(l.rows, l.cols, CV_8UC1);  // a domain like the NanEye's, off centre
+  cv::circle(disc, cv::Point(l.cols / 2 + 20, l.rows / 2), l.rows / 2 - 10, cv::Scalar(1), cv::FILLED);
+  recon::scene::MatcherSettings ms;
+  ms.num_disparities = 64;
+  recon::scene::RectifiedMatcher fresh(l.cols, l.rows, ms), reused(l.cols, l.rows, ms);
+  fresh.match(lf, rf, disc, all);
+  reused.match(lf, rf, all, all);
+  reused.match(lf, rf, disc, all);
+  int valid = 0;
+  for (int y = 0; y < l.rows; ++y)
+    for (int x = 0; x < l.cols; ++x) {
+      const float a = fresh.disparity().at<float>(y, x), b = reused.disparity().at<float>(y, x);
+      valid += std::isfinite(a);
+      ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << x << ", " << y;
+      const float sa = fresh.sigma().at<float>(y, x), sb = reused.sigma().at<float>(y, x);
+      ASSERT_TRUE(sa == sb || (std::isnan(sa) && std::isnan(sb))) << x << ", " << y;
+    }
+  EXPECT_GT(valid, 10000);
+}
+
 }  // namespace
 }  // namespace naneye

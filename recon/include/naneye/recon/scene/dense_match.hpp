@@ -18,6 +18,7 @@
 //      view's disparities from the same aggregated cost must agree); not occluded (no nearer
 //      surface claims the same right pixel); every tap inside both eyes' valid masks.
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -92,9 +93,10 @@ class RectifiedMatcher {
   void validate(const cv::Mat& valid_left);
   void gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool last);
   void correlation(const cv::Mat& valid_left);
+  void update_spans(const cv::Mat& valid_left);
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
-  int bin_of(std::size_t i) const;
+  int bin_of(const float f[2]) const;
   double expected_residual(std::size_t i) const;
 
   // Residual variance per kind of window, 8 x 8 bins of (mean level, log contrast): shot noise is
@@ -105,6 +107,8 @@ class RectifiedMatcher {
   static constexpr int kBins = kBinsPerAxis * kBinsPerAxis;
   static constexpr int kMinPerBin = 20;
   std::array<float, kBins> bin_median_{};
+  std::vector<float> features_;    // per window: mean level, log contrast (window_features)
+  std::vector<std::uint8_t> bin_;  // per window: its bin
   float bin_lo_[2] = {0, 0}, bin_step_[2] = {1, 1};
   double global_median_ = 0;
 
@@ -122,6 +126,13 @@ class RectifiedMatcher {
   std::vector<float> scratch_, line_copy_;
   double mean_ = 0;
   std::vector<float> rho_;  // the residual's autocorrelation over lags [-3, 3]^2
+  // Per rectified row, the columns [span_lo_, span_hi_) from the first to the last pixel with left
+  // data (empty: lo = hi = 0). Every per-pixel plane is written only inside them and is zero
+  // outside, so the window sums, which read across them, need no other bounds.
+  std::vector<int> span_lo_, span_hi_;
+  std::vector<std::uint8_t> taps_ok_;  // right pixels whose 4 cubic taps are all valid
+  bool avx2_ = false;  // the plane kernels' 8-float versions (dense_simd.hpp)
+  std::array<std::uint32_t, 4096> select_hist_{};  // the medians' counts (scene/select.hpp)
   double residual_sigma_ = 0, kappa_ = 1;
 };
 

@@ -1,0 +1,196 @@
+// See dense_simd.hpp. The vector helpers are corners/simd.hpp's (inlined only into the entry points
+// below, each compiled for its own target).
+#include "dense_simd.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "../corners/simd.hpp"
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace naneye::recon::scene::dense_simd {
+namespace {
+using simd::kLanes;
+using simd::load;
+using simd::store;
+
+// Per output row, 2r+1 input rows added into one row (`tmp`, w floats, stays in the first-level
+// cache), then 2r+1 of its columns, in float. Direct sums rather than running ones: nothing drifts
+// along a row, and every inner loop is an array add over whole vectors. Each output's additions
+// come in the same order as in a plain scalar loop (rows top to bottom, then columns left to right).
+template <class V>
+NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict out, float* __restrict tmp,
+                                  const Spans& sp, int r) {
+  constexpr int L = kLanes<V>;
+  const int w = sp.w, h = sp.h;
+  const int inner0 = std::min(r, w), inner1 = std::max(inner0, w - r);
+  for (int y = 0; y < h; ++y) {
+    const int lo = sp.lo[y], hi = sp.hi[y];
+    if (lo >= hi) continue;
+    const int c0 = std::max(0, lo - r), c1 = std::min(w, hi + r);
+    const int y0 = std::max(0, y - r), y1 = std::min(h - 1, y + r);
+    const float* first = in + static_cast<std::size_t>(y0) * w;
+    int x = c0;
+    for (; x + L <= c1; x += L) {
+      V acc = load<V>(first + x);
+      for (int yy = y0 + 1; yy <= y1; ++yy) acc += load<V>(in + static_cast<std::size_t>(yy) * w + x);
+      store(tmp + x, acc);
+    }
+    for (; x < c1; ++x) {
+      float acc = first[x];
+      for (int yy = y0 + 1; yy <= y1; ++yy) acc += in[static_cast<std::size_t>(yy) * w + x];
+      tmp[x] = acc;
+    }
+    float* o = out + static_cast<std::size_t>(y) * w;
+    auto edge = [&](int xe) {
+      float s = 0;
+      for (int k = std::max(0, xe - r); k <= std::min(w - 1, xe + r); ++k) s += tmp[k];
+      o[xe] = s;
+    };
+    const int i0 = std::max(lo, inner0), i1 = std::min(hi, inner1);
+    for (x = lo; x < std::min(hi, inner0); ++x) edge(x);
+    // Inner columns: tmp[x - r .. x + r] all inside [c0, c1).
+    for (x = i0; x + L <= i1; x += L) {
+      V acc = load<V>(tmp + x - r);
+      for (int k = 1 - r; k <= r; ++k) acc += load<V>(tmp + x + k);
+      store(o + x, acc);
+    }
+    for (; x < i1; ++x) {
+      float acc = tmp[x - r];
+      for (int k = 1 - r; k <= r; ++k) acc += tmp[x + k];
+      o[x] = acc;
+    }
+    for (x = std::max(lo, inner1); x < hi; ++x) edge(x);
+  }
+}
+
+// One lag at a time over whole rows: out + rho_lag z, in the lags' row-major order for every pixel.
+template <class V>
+NANEYE_SIMD_INLINE void filter_lags_v(const float* __restrict z, float* __restrict out, const float* rho,
+                                      int lag, const Spans& sp) {
+  constexpr int L = kLanes<V>;
+  const int side = 2 * lag + 1, w = sp.w, h = sp.h;
+  for (int dy = -lag; dy <= lag; ++dy)
+    for (int dx = -lag; dx <= lag; ++dx) {
+      const float r = rho[(dy + lag) * side + dx + lag];
+      for (int y = std::max(0, -dy); y < std::min(h, h - dy); ++y) {
+        const int x0 = std::max(sp.lo[y], -dx), x1 = std::min(sp.hi[y], w - dx);
+        float* __restrict o = out + static_cast<std::size_t>(y) * w;
+        const float* __restrict src = z + static_cast<std::size_t>(y + dy) * w + dx;
+        int x = x0;
+        for (; x + L <= x1; x += L) store(o + x, load<V>(o + x) + r * load<V>(src + x));
+        for (; x < x1; ++x) o[x] += r * src[x];
+      }
+    }
+}
+
+// Lanes of L pixels: the taps are picked per pixel (each its own position), the Keys weights and the
+// ten products computed on whole vectors, with the scalar code's expressions term by term.
+template <class V>
+NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, int x, int count, float out[10][kLanes<V>]) {
+  constexpr int L = kLanes<V>;
+  alignas(32) float T[L], R0[L], R1[L], R2[L], R3[L], Lv[L], M[L];
+  for (int j = 0; j < L; ++j) {
+    T[j] = R0[j] = R1[j] = R2[j] = R3[j] = Lv[j] = M[j] = 0.f;
+    if (j >= count) continue;
+    const float d = g.d[x + j];
+    if (!std::isfinite(d)) continue;
+    const float xs = static_cast<float>(x + j) - d;
+    const int i0 = static_cast<int>(std::floor(xs));
+    if (i0 < 1 || i0 + 2 >= g.w || !g.taps_ok[i0]) continue;
+    T[j] = xs - static_cast<float>(i0);
+    R0[j] = g.right[i0 - 1] - g.mu;
+    R1[j] = g.right[i0] - g.mu;
+    R2[j] = g.right[i0 + 1] - g.mu;
+    R3[j] = g.right[i0 + 2] - g.mu;
+    Lv[j] = g.left[x + j] - g.mu;
+    M[j] = 1.f;
+  }
+  // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
+  // from tap 0, for taps -1, 0, 1, 2.
+  const V t = load<V>(T), t2 = t * t, t3 = t2 * t;
+  const V w0 = -0.5f * t3 + t2 - 0.5f * t, w1 = 1.5f * t3 - 2.5f * t2 + 1.f;
+  const V w2 = -1.5f * t3 + 2.f * t2 + 0.5f * t, w3 = 0.5f * t3 - 0.5f * t2;
+  const V dw0 = -1.5f * t2 + 2.f * t - 0.5f, dw1 = 4.5f * t2 - 5.f * t;
+  const V dw2 = -4.5f * t2 + 4.f * t + 0.5f, dw3 = 1.5f * t2 - t;
+  const V r0 = load<V>(R0), r1 = load<V>(R1), r2 = load<V>(R2), r3 = load<V>(R3);
+  V W = V{}, G = V{};
+  W += w0 * r0;
+  W += w1 * r1;
+  W += w2 * r2;
+  W += w3 * r3;
+  G += dw0 * r0;
+  G += dw1 * r1;
+  G += dw2 * r2;
+  G += dw3 * r3;
+  const V m = load<V>(M), l = load<V>(Lv);
+  store(out[0], m);
+  store(out[1], m * W);
+  store(out[2], m * l);
+  store(out[3], m * G);
+  store(out[4], m * W * W);
+  store(out[5], m * G * G);
+  store(out[6], m * W * G);
+  store(out[7], m * W * l);
+  store(out[8], m * G * l);
+  store(out[9], m * l * l);
+}
+
+template <class V>
+NANEYE_SIMD_INLINE void gather_row_v(const GatherRow& g) {
+  constexpr int L = kLanes<V>;
+  alignas(32) float out[10][L];
+  for (int x = g.lo; x < g.hi; x += L) {
+    const int count = std::min(L, g.hi - x);
+    gather_block<V>(g, x, count, out);
+    for (int c = 0; c < 10; ++c)
+      if (count == L)
+        store(g.ch[c] + x, load<V>(out[c]));
+      else
+        for (int j = 0; j < count; ++j) g.ch[c][x + j] = out[c][j];
+  }
+}
+
+void box_sum_sse(const float* in, float* out, float* tmp, const Spans& sp, int r) {
+  box_sum_v<simd::V4>(in, out, tmp, sp, r);
+}
+__attribute__((target("avx2"))) void box_sum_avx2(const float* in, float* out, float* tmp, const Spans& sp,
+                                                  int r) {
+  box_sum_v<simd::V8>(in, out, tmp, sp, r);
+}
+void filter_lags_sse(const float* z, float* out, const float* rho, int lag, const Spans& sp) {
+  filter_lags_v<simd::V4>(z, out, rho, lag, sp);
+}
+__attribute__((target("avx2"))) void filter_lags_avx2(const float* z, float* out, const float* rho, int lag,
+                                                      const Spans& sp) {
+  filter_lags_v<simd::V8>(z, out, rho, lag, sp);
+}
+void gather_row_sse(const GatherRow& g) {
+  gather_row_v<simd::V4>(g);
+}
+__attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& g) {
+  gather_row_v<simd::V8>(g);
+}
+}  // namespace
+
+bool avx2_available() {
+  return __builtin_cpu_supports("avx2");
+}
+
+void box_sum(bool avx2, const float* in, float* out, float* tmp, const Spans& sp, int r) {
+  (avx2 ? box_sum_avx2 : box_sum_sse)(in, out, tmp, sp, r);
+}
+
+void filter_lags(bool avx2, const float* z, float* out, const float* rho, int lag, const Spans& sp) {
+  (avx2 ? filter_lags_avx2 : filter_lags_sse)(z, out, rho, lag, sp);
+}
+
+void gather_row(bool avx2, const GatherRow& g) {
+  (avx2 ? gather_row_avx2 : gather_row_sse)(g);
+}
+
+}  // namespace naneye::recon::scene::dense_simd
+
+#pragma GCC diagnostic pop

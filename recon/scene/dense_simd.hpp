@@ -1,0 +1,51 @@
+#pragma once
+// The dense sub-pixel step's plane kernels (dense_subpixel.cpp): the window sums and the residual's
+// lag filter, written once over a GCC vector type and compiled twice, 4 floats (SSE2, the x86-64
+// baseline) and 8 floats (AVX2), chosen at run time as corners/simd.hpp does. They add and multiply
+// in the scalar loops' order and never fuse a multiply-add (the AVX2 code is built without FMA), so
+// both give the scalar code's bits: the dense results do not depend on the machine.
+#include <cstddef>
+#include <cstdint>
+
+namespace naneye::recon::scene::dense_simd {
+
+bool avx2_available();
+
+// The rows' spans of left data (RectifiedMatcher::span_lo_, span_hi_): the per-pixel work runs
+// only there, ~70 % of the rectified grid (its band columns and the domain disc's corners carry
+// nothing).
+struct Spans {
+  const int *lo, *hi;
+  int w, h;
+  template <class F>
+  void each(F&& f) const {
+    for (int y = 0; y < h; ++y)
+      for (int x = lo[y]; x < hi[y]; ++x) f(static_cast<std::size_t>(y) * w + x);
+  }
+};
+
+// Sum over the (2r+1)^2 window (zero outside the image), output inside the spans only (`in` is zero
+// outside them); `tmp` holds w floats.
+void box_sum(bool avx2, const float* in, float* out, float* tmp, const Spans& sp, int r);
+
+// out += rho * z inside the spans, rho over lags [-lag, lag]^2 (row-major), z zero outside the
+// image and the spans.
+void filter_lags(bool avx2, const float* z, float* out, const float* rho, int lag, const Spans& sp);
+
+// One rectified row of the sub-pixel step's per-pixel products (RectifiedMatcher::gather): the right
+// row sampled at x - d by Keys' cubic (W) and its derivative (G), the left pixel (l), all less mu,
+// and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1 where every tap lies inside the
+// right's valid domain, else all zero).
+struct GatherRow {
+  const float* left;   // left row
+  const float* right;  // right row
+  // taps_ok[i]: right pixels i - 1 .. i + 2 all valid (only read for 1 <= i < w - 2)
+  const std::uint8_t* taps_ok;
+  const float* d;  // the row's reference disparities (NaN: none)
+  float* ch[10];   // the ten channel planes, at this row
+  int lo, hi, w;   // columns [lo, hi) of a w-wide row
+  float mu;        // the level subtracted from both images
+};
+void gather_row(bool avx2, const GatherRow& g);
+
+}  // namespace naneye::recon::scene::dense_simd

@@ -1,0 +1,177 @@
+// The dense path's vector kernels (recon/scene/dense_simd.hpp) and its median selection
+// (recon/scene/select.hpp): the 4-lane (SSE2) and 8-lane (AVX2, when this CPU has it) builds give
+// the plain scalar loops' bits, and kth_smallest gives std::nth_element's value. The dense maps
+// therefore do not depend on the machine they are computed on.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "../../recon/scene/dense_simd.hpp"
+#include "../../recon/scene/select.hpp"
+
+namespace naneye::recon::scene {
+namespace {
+
+std::vector<bool> dense_kernel_builds() {
+  std::vector<bool> b{false};
+  if (dense_simd::avx2_available()) b.push_back(true);
+  return b;
+}
+
+// A w x h plane with data only inside random row spans (zero elsewhere), as the matcher keeps it.
+struct SpanPlane {
+  int w = 61, h = 23;  // odd sizes: every vector loop has a scalar tail
+  std::vector<int> lo, hi;
+  std::vector<float> v;
+  explicit SpanPlane(std::mt19937& rng) : lo(static_cast<std::size_t>(h)), hi(static_cast<std::size_t>(h)) {
+    std::uniform_int_distribution<int> col(0, w);
+    std::uniform_real_distribution<float> val(-300.f, 300.f);
+    v.assign(static_cast<std::size_t>(w) * h, 0.f);
+    for (std::size_t y = 0; y < lo.size(); ++y) {
+      lo[y] = col(rng);
+      hi[y] = std::max(lo[y], col(rng));
+      if (y % 7 == 3) lo[y] = hi[y] = 0;  // rows without data
+      for (int x = lo[y]; x < hi[y]; ++x)
+        v[y * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)] = val(rng);
+    }
+  }
+  dense_simd::Spans spans() const { return {lo.data(), hi.data(), w, h}; }
+  float at(int x, int y) const {
+    return x < 0 || y < 0 || x >= w || y >= h
+               ? 0.f
+               : v[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)];
+  }
+};
+
+TEST(DenseKernels, BoxSumGivesTheScalarSumsBits) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const SpanPlane p(rng);
+    for (const bool avx2 : dense_kernel_builds()) {
+      std::vector<float> out(p.v.size(), -1.f), tmp(static_cast<std::size_t>(p.w));
+      dense_simd::box_sum(avx2, p.v.data(), out.data(), tmp.data(), p.spans(), 3);
+      for (int y = 0; y < p.h; ++y)
+        for (int x = p.lo[static_cast<std::size_t>(y)]; x < p.hi[static_cast<std::size_t>(y)]; ++x) {
+          // Rows top to bottom into each column, then the columns left to right.
+          float s = 0;
+          bool first = true;
+          for (int k = std::max(0, x - 3); k <= std::min(p.w - 1, x + 3); ++k) {
+            float col = p.at(k, std::max(0, y - 3));
+            for (int yy = std::max(0, y - 3) + 1; yy <= std::min(p.h - 1, y + 3); ++yy) col += p.at(k, yy);
+            // The inner columns start from the first column's sum, the edges from 0 (both exact).
+            s = first ? col : s + col;
+            first = false;
+          }
+          ASSERT_EQ(out[static_cast<std::size_t>(y) * p.w + static_cast<std::size_t>(x)], s)
+              << (avx2 ? "avx2 " : "sse ") << x << ", " << y;
+        }
+    }
+  }
+}
+
+TEST(DenseKernels, LagFilterGivesTheScalarLoopsBits) {
+  std::mt19937 rng(4);
+  std::vector<float> rho(49);
+  std::uniform_real_distribution<float> r(-1.f, 1.f);
+  for (auto& x : rho) x = r(rng);
+  for (int trial = 0; trial < 10; ++trial) {
+    const SpanPlane p(rng);
+    for (const bool avx2 : dense_kernel_builds()) {
+      std::vector<float> out(p.v.size(), 0.f);
+      dense_simd::filter_lags(avx2, p.v.data(), out.data(), rho.data(), 3, p.spans());
+      for (int y = 0; y < p.h; ++y)
+        for (int x = p.lo[static_cast<std::size_t>(y)]; x < p.hi[static_cast<std::size_t>(y)]; ++x) {
+          float s = 0;
+          for (int dy = -3; dy <= 3; ++dy)
+            for (int dx = -3; dx <= 3; ++dx)
+              if (y + dy >= 0 && y + dy < p.h && x + dx >= 0 && x + dx < p.w)
+                s += rho[static_cast<std::size_t>((dy + 3) * 7 + dx + 3)] * p.at(x + dx, y + dy);
+          ASSERT_EQ(out[static_cast<std::size_t>(y) * p.w + static_cast<std::size_t>(x)], s)
+              << (avx2 ? "avx2 " : "sse ") << x << ", " << y;
+        }
+    }
+  }
+}
+
+TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
+  std::mt19937 rng(5);
+  constexpr int w = 83;
+  std::uniform_real_distribution<float> val(0.f, 900.f), disp(-2.f, 30.f);
+  std::vector<float> left(w), right(w), d(w);
+  std::vector<std::uint8_t> valid(w), ok(w);
+  for (int x = 0; x < w; ++x) {
+    left[x] = val(rng);
+    right[x] = val(rng);
+    d[x] = x % 11 == 5 ? NAN : disp(rng);
+    valid[x] = x % 17 != 9;
+  }
+  for (int x = 0; x < w; ++x)
+    ok[x] = x >= 1 && x + 2 < w && valid[x - 1] && valid[x] && valid[x + 1] && valid[x + 2];
+  const float mu = 412.5f;
+  for (const bool avx2 : dense_kernel_builds()) {
+    std::vector<float> ch(10 * w, -1.f);
+    dense_simd::GatherRow g{};
+    g.left = left.data();
+    g.right = right.data();
+    g.taps_ok = ok.data();
+    g.d = d.data();
+    for (int k = 0; k < 10; ++k) g.ch[k] = ch.data() + k * w;
+    g.lo = 3;
+    g.hi = w - 1;
+    g.w = w;
+    g.mu = mu;
+    dense_simd::gather_row(avx2, g);
+    for (int x = g.lo; x < g.hi; ++x) {
+      float m = 0, W = 0, G = 0, l = 0;
+      if (std::isfinite(d[x])) {
+        const float xs = static_cast<float>(x) - d[x];
+        const int i0 = static_cast<int>(std::floor(xs));
+        if (i0 >= 1 && i0 + 2 < w && ok[i0]) {
+          const float t = xs - static_cast<float>(i0), t2 = t * t, t3 = t2 * t;
+          const float wk[4] = {-0.5f * t3 + t2 - 0.5f * t, 1.5f * t3 - 2.5f * t2 + 1,
+                               -1.5f * t3 + 2 * t2 + 0.5f * t, 0.5f * t3 - 0.5f * t2};
+          const float dk[4] = {-1.5f * t2 + 2 * t - 0.5f, 4.5f * t2 - 5 * t, -4.5f * t2 + 4 * t + 0.5f,
+                               1.5f * t2 - t};
+          for (int k = 0; k < 4; ++k) {
+            W += wk[k] * (right[i0 - 1 + k] - mu);
+            G += dk[k] * (right[i0 - 1 + k] - mu);
+          }
+          l = left[x] - mu;
+          m = 1;
+        }
+      }
+      const float want[10] = {m,         m * W,     m * l,     m * G,     m * W * W,
+                              m * G * G, m * W * G, m * W * l, m * G * l, m * l * l};
+      for (int k = 0; k < 10; ++k)
+        ASSERT_EQ(ch[k * w + x], want[k]) << (avx2 ? "avx2 " : "sse ") << x << " ch " << k;
+    }
+    EXPECT_EQ(ch[0 * w + 2], -1.f);  // outside [lo, hi): untouched
+    EXPECT_EQ(ch[0 * w + w - 1], -1.f);
+  }
+}
+
+TEST(DenseKernels, KthSmallestIsNthElementsValue) {
+  std::mt19937 rng(6);
+  SelectHistogram hist;
+  for (int trial = 0; trial < 50; ++trial) {
+    const std::size_t n = 1 + rng() % 5000;
+    std::vector<float> v(n);
+    std::lognormal_distribution<float> ln(0.f, 1.5f);
+    for (auto& x : v) {
+      x = ln(rng);
+      if (rng() % 10 == 0) x = 0.f;                    // zeros
+      if (rng() % 10 == 1) x = std::round(x * 4) / 4;  // ties
+      if (rng() % 50 == 2) x = -0.f;                   // as std::max(0, -0) can give
+    }
+    const std::size_t k = trial % 3 == 0 ? n / 2 : rng() % n;
+    std::vector<float> a = v, b = v;
+    std::nth_element(a.begin(), a.begin() + static_cast<long>(k), a.end());
+    EXPECT_EQ(kth_smallest(b.data(), n, k, hist), a[k]) << n << " " << k;
+  }
+}
+
+}  // namespace
+}  // namespace naneye::recon::scene
