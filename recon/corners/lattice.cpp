@@ -21,6 +21,9 @@ constexpr int kMaxStrayCells = 2;
 // board is its saddles: a few predictions among 48 are confirmed or refused by the fit, the quadrant
 // test and the plane test like any corner; a lattice made mostly of predictions is no board's.
 constexpr int kMaxFilledHoles = 4;
+// A filled hole's raw position, undistorted again, within this of where it was put (px): 5x the
+// tabulated undistortion's own error (0.02 px); where the projection folds back it fails.
+constexpr float kHoleRoundTripPx = 0.1f;
 constexpr int kMaxCells = 2 * kMaxCorners + 64;
 constexpr std::array<std::array<int, 2>, 4> kDirs = {{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
 
@@ -116,8 +119,9 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   put(o + 1, o + 1, d);
   int holes = 0;
   // An empty cell between two cells of the component (along either axis), undistorted coordinates
-  // interpolated: a homography's midpoint is off by the second order of the step's change (a few
-  // hundredths of a pixel at Dataset 3's strongest perspective), far inside the fit's reach.
+  // interpolated: a homography's midpoint is off by the second order of the step's change, far less
+  // than the lattice's own tolerance (0.3 of the step) from which the fits start anyway. The raw
+  // position must undistort back to it within kHoleRoundTripPx (not beyond the fold).
   auto fill_hole = [&]() {
     int i0 = side, i1 = -1, j0 = side, j1 = -1;
     for (int k = 0; k < n; ++k) {
@@ -143,7 +147,10 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
         const double f = cam_.fx();
         const Eigen::Vector2d px = cam_.project(Eigen::Vector3d(und.x() / f, und.y() / f, 1.0));
         Eigen::Vector2f back;
-        if (!px.allFinite() || !undistort_px(px.cast<float>(), back) || (back - und).norm() > 0.1f) continue;
+        if (!px.allFinite() || !undistort_px(px.cast<float>(), back) ||
+            (back - und).norm() > kHoleRoundTripPx) {
+          continue;
+        }
         SaddleCandidate& c = cand_[static_cast<std::size_t>(count_)];
         c.px = px.cast<float>();
         c.und = und;
