@@ -70,6 +70,7 @@ class BoardPlane {
     }
     H_ = cv::findHomography(grid_, undistorted, cv::LMEDS);
   }
+  bool ok() const { return !H_.empty(); }
   // How far the raw pixel p lies from where the plane puts grid corner j, in pixels.
   double residual(int j, const Eigen::Vector2d& p) const {
     std::vector<cv::Point2f> at;
@@ -121,7 +122,7 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   int images = 0, found = 0;
   double worst = 0, sum2 = 0;
   int n = 0, poor = 0, judged_by_plane = 0;
-  double poor_worst = 0, plane_gain = 0;
+  double poor_worst = 0, plane_gain = 0, plane_worst = 0;
   for (int e = 0; e < 2; ++e) {
     double cal_rms = 0;
     const CameraModel cam = opencv_camera(refs[e], cal_rms);
@@ -141,6 +142,7 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
       if (!ok) continue;
       ++found;
       const BoardPlane plane(cam, ref);
+      ASSERT_TRUE(plane.ok()) << name << ": no homography from cornerSubPix's corners";
       for (int i = 0; i < res.count; ++i) {
         const Eigen::Vector2d p = res.corners[static_cast<std::size_t>(i)].px;
         double best = 1e30;
@@ -166,11 +168,16 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
           const cv::Point2f& q = ref[static_cast<std::size_t>(nearest)];
           const double ours_off = plane.residual(nearest, p);
           const double theirs_off = plane.residual(nearest, Eigen::Vector2d(q.x, q.y));
+          // And within twice the lens calibration's own RMS of the plane: the plane is no better
+          // than the lens it undistorts with (0.41 / 0.46 px), and a corner off by more is wrong
+          // whatever cornerSubPix did.
+          EXPECT_LE(ours_off, 2.0 * cal_rms) << name << " corner " << i;
           EXPECT_LE(ours_off, theirs_off + kPlaneSlackPx)
               << name << " corner " << i << ": " << best << " px from cornerSubPix's, " << ours_off
               << " px off the board's plane against its " << theirs_off;
           ++judged_by_plane;
           plane_gain = std::max(plane_gain, theirs_off - ours_off);
+          plane_worst = std::max(plane_worst, ours_off);
           continue;
         }
         worst = std::max(worst, best);
@@ -181,10 +188,10 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   }
   std::printf(
       "photographs: %d/%d images found; %d corners within %.1f px of cornerSubPix (%.3f px RMS, worst "
-      "%.3f px); %d farther, judged by the board's plane (cornerSubPix's up to %.2f px farther off it "
-      "than ours); %d flagged poor (worst %.2f px from cornerSubPix's)\n",
-      found, images, n, kAgreePx, n ? std::sqrt(sum2 / n) : 0.0, worst, judged_by_plane, plane_gain, poor,
-      poor_worst);
+      "%.3f px); %d farther, judged by the board's plane (ours at most %.2f px off it, cornerSubPix's up "
+      "to %.2f px farther than ours); %d flagged poor (worst %.2f px from cornerSubPix's)\n",
+      found, images, n, kAgreePx, n ? std::sqrt(sum2 / n) : 0.0, worst, judged_by_plane, plane_worst,
+      plane_gain, poor, poor_worst);
   EXPECT_EQ(images, 26);
   // The target is every image (26); this is what the detector finds today (docs/corners.md,
   // "Real photographs": right08 is refused as possibly a larger board), kept as a floor.
