@@ -5,6 +5,7 @@
 // Eigen fixes its packet size per translation unit, and two sizes of the same Eigen template in
 // one program would violate the one-definition rule; these plain loops are always inlined into
 // their entry points, so each entry point holds its own code.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -128,7 +129,9 @@ template <class V>
 NANEYE_SIMD_INLINE void shape(const ModelParams& m, const float* yx, const float* yy, int n, float* U1,
                               float* U2, float* E1, float* E2, float* G1, float* G2, float* S) {
   constexpr int L = kLanes<V>;
-  const float rho = m.c1 * m.c2 + m.s1 * m.s2;
+  // Parallel edges make no corner; the free-edge fit can still wander there, and 1 - rho^2 <= 0
+  // (rounding can put |rho| past 1) would turn the model into inf / NaN. 0.999: 2.6 degrees.
+  const float rho = std::clamp(m.c1 * m.c2 + m.s1 * m.s2, -0.999f, 0.999f);
   const bool exact = rho > kExactCornerRho || rho < -kExactCornerRho;
   std::array<float, 8> node_r{}, node_c{}, node_w{};
   float cross = 0;
