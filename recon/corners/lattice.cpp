@@ -122,14 +122,19 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   // interpolated: a homography's midpoint is off by the second order of the step's change, far less
   // than the lattice's own tolerance (0.3 of the step) from which the fits start anyway. The raw
   // position must undistort back to it within kHoleRoundTripPx (not beyond the fold).
-  auto fill_hole = [&]() {
-    int i0 = side, i1 = -1, j0 = side, j1 = -1;
+  // The component's bounding box of cells, [i0, i1] x [j0, j1].
+  auto bounds = [&](int& i0, int& i1, int& j0, int& j1) {
+    i0 = side, i1 = -1, j0 = side, j1 = -1;
     for (int k = 0; k < n; ++k) {
       i0 = std::min(i0, cells[static_cast<std::size_t>(k)][0]);
       i1 = std::max(i1, cells[static_cast<std::size_t>(k)][0]);
       j0 = std::min(j0, cells[static_cast<std::size_t>(k)][1]);
       j1 = std::max(j1, cells[static_cast<std::size_t>(k)][1]);
     }
+  };
+  auto fill_hole = [&]() {
+    int i0, i1, j0, j1;
+    bounds(i0, i1, j0, j1);
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i) {
         if (at(i, j) >= 0) continue;
@@ -200,13 +205,8 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   // Holes only once the growth has stopped, and no growth from them: a filled cell must not extend
   // the component (a photograph's ring of border-square corners would grow into a larger board).
   while (holes < kMaxFilledHoles && fill_hole()) ++holes;
-  int i0 = side, i1 = -1, j0 = side, j1 = -1;
-  for (int k = 0; k < n; ++k) {
-    i0 = std::min(i0, cells[static_cast<std::size_t>(k)][0]);
-    i1 = std::max(i1, cells[static_cast<std::size_t>(k)][0]);
-    j0 = std::min(j0, cells[static_cast<std::size_t>(k)][1]);
-    j1 = std::max(j1, cells[static_cast<std::size_t>(k)][1]);
-  }
+  int i0, i1, j0, j1;
+  bounds(i0, i1, j0, j1);
   // The pattern must sit in the component at exactly one place (either way round): two places means
   // a larger board (nothing is certain), none means part of a board (cut by the edge, or a saddle
   // missed). A few cells beyond it are false links (the border squares' outer corners under strong
