@@ -127,11 +127,13 @@ class RectifiedMatcher {
   double mean_ = 0;
   std::vector<float> rho_;  // the residual's autocorrelation over lags [-3, 3]^2
   // Per rectified row, the columns [span_lo_, span_hi_) from the first to the last pixel with left
-  // data (empty: lo = hi = 0). Every per-pixel plane is written only inside them and is zero
-  // outside, so the window sums, which read across them, need no other bounds.
+  // data (empty: lo = hi = 0). The channel planes (chan_) are written only inside them and kept
+  // zero outside, so the window sums, which read across them, need no other bounds. The other
+  // per-pixel planes (sums_, n_, a_, b_, c_, s2_, z_, ...) keep stale values of earlier pairs
+  // outside the spans: nothing may read them there.
   std::vector<int> span_lo_, span_hi_;
-  std::vector<std::uint8_t> taps_ok_;  // right pixels whose 4 cubic taps are all valid
-  bool avx2_ = false;  // the plane kernels' 8-float versions (dense_simd.hpp)
+  std::vector<std::uint8_t> taps_ok_;              // right pixels whose 4 cubic taps are all valid
+  bool avx2_ = false;                              // the plane kernels' 8-float versions (dense_simd.hpp)
   std::array<std::uint32_t, 4096> select_hist_{};  // the medians' counts (scene/select.hpp)
   double residual_sigma_ = 0, kappa_ = 1;
 };
