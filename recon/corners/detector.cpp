@@ -141,9 +141,7 @@ void CornerDetector::luminance_and_noise(const RawImageView& image, int row_lo, 
   // quantisation floor (seen: sigma 0.1 DN where the truth is 2.5 on tilted and close boards).
   std::array<float, 4> clip;
   for (std::size_t k = 0; k < 4; ++k) {
-    clip[k] = bayer_ && balance_.valid
-                  ? (NoiseEstimator::kDefaultClipDn - balance_.offset[k]) / balance_.gain[k]
-                  : NoiseEstimator::kDefaultClipDn;
+    clip[k] = bayer_ && balance_.valid ? (kClipDn - balance_.offset[k]) / balance_.gain[k] : kClipDn;
   }
   const NoiseModel m = noise_estimator_.estimate(mosaic, width_, r0, r1, width_ - image.ignore_last_cols,
                                                  bayer_ ? 2 : 1, clip);
@@ -157,7 +155,7 @@ void CornerDetector::mark_clipped(const RawImageView& image, int row_lo, int row
   // a value that looks linear and is not. Mono pixels are judged by their own value (>= 1020).
   any_clipped_ = false;
   if (!bayer_) return;
-  constexpr std::uint16_t kClipRaw = 1020;  // 10-bit full scale less 8-bit data's quantum (x 4)
+  constexpr auto kClipRaw = static_cast<std::uint16_t>(kClipDn);
   const int w = width_, h = height_;
   // Reference rows are no light (the luminance replaces them by same-site neighbours).
   const int r0 = std::max(row_lo - 1, image.ignore_edge_rows);
@@ -168,26 +166,28 @@ void CornerDetector::mark_clipped(const RawImageView& image, int row_lo, int row
     any_clipped_ = *std::max_element(p, p + c_end) >= kClipRaw;
   }
   if (!any_clipped_) return;
-  // Bit 1: a clipped site and its two horizontal neighbours; bit 2: the rows above and below those.
+  // The 3 x 3 neighbourhood of every clipped site, within the rows read.
   std::fill(clipped_.begin() + static_cast<std::ptrdiff_t>(r0) * w,
             clipped_.begin() + static_cast<std::ptrdiff_t>(r1) * w, 0);
   for (int r = r0; r < r1; ++r) {
     const std::uint16_t* p = image.data + static_cast<std::ptrdiff_t>(r) * image.stride;
-    std::uint8_t* m = clipped_.data() + static_cast<std::ptrdiff_t>(r) * w;
     for (int c = 0; c < c_end; ++c) {
       if (p[c] < kClipRaw) continue;
-      for (int dc = -1; dc <= 1; ++dc)
-        if (c + dc >= 0 && c + dc < w) m[c + dc] |= 1;
+      for (int rr = std::max(r - 1, r0); rr <= std::min(r + 1, r1 - 1); ++rr)
+        for (int cc = std::max(c - 1, 0); cc <= std::min(c + 1, w - 1); ++cc)
+          clipped_[static_cast<std::size_t>(rr * w + cc)] = 1;
     }
   }
-  for (int r = r0; r < r1; ++r) {
-    std::uint8_t* m = clipped_.data() + static_cast<std::ptrdiff_t>(r) * w;
-    for (int c = 0; c < w; ++c) {
-      if (!(m[c] & 1)) continue;
-      if (r - 1 >= r0) clipped_[static_cast<std::size_t>((r - 1) * w + c)] |= 2;
-      if (r + 1 < r1) clipped_[static_cast<std::size_t>((r + 1) * w + c)] |= 2;
-    }
-  }
+}
+
+LumaView CornerDetector::luma_view() const {
+  return LumaView{luma_.data(),
+                  width_,
+                  height_,
+                  row_begin_,
+                  row_end_,
+                  col_end_,
+                  any_clipped_ ? clipped_.data() : nullptr};
 }
 
 std::pair<int, int> CornerDetector::tracking_rows(const CornerResult& previous) const {
@@ -234,7 +234,7 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool
 }
 
 bool CornerDetector::full_search(CornerResult& out) {
-  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_, nullptr};
+  const LumaView v = luma_view();
   bool found = coarse_finder_.find(v, settings_.board.rows, settings_.board.cols, coarse_.data(), &noise_);
   if (!found && settings_.opencv_fallback) {
     found = coarse_grid_opencv(v, settings_.board.rows, settings_.board.cols, gray8_, coarse_);
@@ -260,7 +260,7 @@ bool CornerDetector::full_search(CornerResult& out) {
 
 bool CornerDetector::validate(const CornerResult& out) {
   // Every corner a saddle of the right polarity: a checkerboard alternates along rows and columns.
-  const LumaView v{luma_.data(), width_, height_, row_begin_, row_end_, col_end_, nullptr};
+  const LumaView v = luma_view();
   const int p0 = corner_polarity(v, out, 0, 0);
   failure_ = CornerFailure::polarity;
   if (p0 == 0) return false;

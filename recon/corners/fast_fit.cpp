@@ -1,5 +1,7 @@
 #include "naneye/recon/corners/fast_fit.hpp"
 
+#include "naneye/recon/corners/noise.hpp"
+
 #include "simd.hpp"
 
 #include <Eigen/Cholesky>
@@ -16,8 +18,6 @@ constexpr int kParams = 11;  // qx qy t1 t2 s a gx gy b hx hy
 constexpr double kTrustStepPx = 0.05;
 constexpr double kOutlierCheckRelative = 0.05;  // see the outlier check in fit_saddle_fast
 constexpr int kMaxOutliers = 4;
-// 10-bit full scale (1023) less the quantum of 8-bit data scaled by 4 (255 x 4 = 1020).
-constexpr float kClipDn = 1020.0f;
 // A blurred edge reaches 2.5 sigma (erf 0.9996 of its step) into the window; the fitted blur is at
 // least the lens's (the real NanEye's ~1 px, the simulator's 0.3-0.4 px), taken as 0.5 px when the
 // start knows none better.

@@ -30,8 +30,6 @@ namespace {
 // axis: correlations 1, 2/3, 1/6 at lags 0, 1, 2, so 1 + 2 (4/9 + 1/36) = 1.944 per axis): a window
 // of n filtered pixels has the residual-variance spread of n / 3.78 independent ones.
 constexpr double kBayerNoiseCorrelation = 1.9444444444444444 * 1.9444444444444444;
-// 10-bit full scale less 8-bit data's quantum (x 4): a level at or above it may be clipped.
-constexpr double kMidpointClipDn = 1020.0;
 }  // namespace
 
 double CornerDetector::residual_bound(const SaddleFit& fit, double radius, double misfit) const {
@@ -59,13 +57,7 @@ double CornerDetector::fit_radius(double spacing) const {
 
 bool CornerDetector::fit_corner(const SaddleInit& init, const EdgeDirections* edges, double radius,
                                 double tolerance_px, SaddleFit& fit, std::uint8_t& flags) {
-  const LumaView v{luma_.data(),
-                   width_,
-                   height_,
-                   row_begin_,
-                   row_end_,
-                   col_end_,
-                   any_clipped_ ? clipped_.data() : nullptr};
+  const LumaView v = luma_view();
   FastFitScratch& w = work_.front();
   auto run = [&](const SaddleInit& s, double rad, SaddleFit& f) {
     return fit_saddle_fast(v, camera_, *map_, s, edges, rad, 50, tolerance_px, w, f);
@@ -287,7 +279,7 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
     // Whites clipped so far that the mean of white and black lies beyond the clip: the edges' midpoints,
     // which place the corner, were not imaged but extrapolated from the profile's dark half (seen
     // 0.15-0.35 px off on boards at 36-50 mm exposed for 70 mm, against 0.03 px for the others).
-    if (fit.shading.a >= kMidpointClipDn) flags[i] |= kCornerFitPoor;
+    if (fit.shading.a >= kClipDn) flags[i] |= kCornerFitPoor;
     if (!fit.undistorted || !camera_.in_domain(fit.px)) flags[i] |= kCornerBeyondFold;
     Corner& k = out.corners[i];
     k.px = fit.px;

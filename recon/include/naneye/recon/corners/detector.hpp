@@ -178,6 +178,8 @@ class CornerDetector {
   bool validate(const CornerResult& out);
   void luminance_and_noise(const RawImageView& image, int row_lo, int row_hi);
   void mark_clipped(const RawImageView& image, int row_lo, int row_hi);
+  // The frame's luminance with its usable area and, when any, the clip mark (read by the fits only).
+  LumaView luma_view() const;
 
   CameraModel camera_;
   CornerSettings settings_;

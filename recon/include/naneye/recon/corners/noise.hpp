@@ -39,6 +39,11 @@ struct CfaBalance {
 // The standard normal quantile z with P(Z > z) = p (bisection on erfc; for settings, not per frame).
 double upper_normal_quantile(double p);
 
+// 10-bit full scale (1023) less the quantum of 8-bit data scaled by 4 (255 x 4 = 1020): a value at
+// or above it may be clipped, and says only that the light was at least that. The one clip level of
+// the corner detector (noise blocks, the fit's weights, the Bayer clip mark, edge midpoints).
+inline constexpr float kClipDn = 1020.0f;
+
 // Work space of estimate_noise (a histogram per level bin, sized once).
 class NoiseEstimator {
  public:
@@ -53,10 +58,7 @@ class NoiseEstimator {
   // [0] for mono) are saturated and left out: a white-balanced mosaic's clipped sites land at
   // (1020 - offset) / gain, under 1020 for a gain above 1.
   NoiseModel estimate(const float* img, int w, int row_lo, int row_hi, int col_end, int step,
-                      const std::array<float, 4>& clip_dn = {kDefaultClipDn, kDefaultClipDn, kDefaultClipDn,
-                                                             kDefaultClipDn});
-  // 10-bit full scale less the quantum of 8-bit data scaled by 4: a value reaching it may be clipped.
-  static constexpr float kDefaultClipDn = 1020.0f;
+                      const std::array<float, 4>& clip_dn = {kClipDn, kClipDn, kClipDn, kClipDn});
 
  private:
   std::array<std::array<std::uint32_t, kDevBins>, kLevelBins> hist_{};
