@@ -93,6 +93,8 @@ class RectifiedMatcher {
   void validate(const cv::Mat& valid_left);
   void gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool last);
   void correlation(const cv::Mat& valid_left);
+  void reference_detail();
+  const float* window_detail();
   void update_spans(const cv::Mat& valid_left);
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
