@@ -6,7 +6,7 @@
 #include <array>
 #include <cmath>
 
-#include "interpolate.hpp"
+#include "lk_sample.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -35,12 +35,15 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   // (`shape`), where the template's gradient is d T / d q = d T / d x * A0^-1 (A0 varies little over
   // the window; a gradient slightly off only slows convergence, the fixed point stays).
   std::array<Eigen::Vector2d, kMaxN> q;
+  std::array<float, kMaxN> qx{}, qy{};  // q as the sampling kernel reads it
   const Eigen::Matrix2d to_q = shape ? Eigen::Matrix2d(A0.inverse()) : Eigen::Matrix2d::Identity();
   Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
     for (int dc = -rad; dc <= rad; ++dc, ++k) {
       t[k] = static_cast<float>((t[k] - mean) * scale);
       q[k] = shape ? shape[k] : Eigen::Vector2d(dc, dr);
+      qx[k] = static_cast<float>(q[k].x());
+      qy[k] = static_cast<float>(q[k].y());
       const std::size_t p = static_cast<std::size_t>(v + dr) * src.width + u + dc;
       const Eigen::RowVector2d g = Eigen::RowVector2d(tgx[p] * scale, tgy[p] * scale) * to_q;
       // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5).
@@ -60,13 +63,12 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     const int ci = static_cast<int>(std::lround(c.x())), ri = static_cast<int>(std::lround(c.y()));
     if (ci < 0 || ri < 0 || ci >= dst.width || ri >= dst.height || !dst_usable[ri * dst.width + ci])
       return false;
+    lk_sample::Warp w;
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 3; ++c) w.m[3 * r + c] = static_cast<float>(M(r, c));
+    if (!lk_sample::sample_window(dst, w, qx.data(), qy.data(), n, wi.data())) return false;
     double m = 0;
-    for (int k = 0; k < n; ++k) {
-      const double x = M(0, 0) * q[k].x() + M(0, 1) * q[k].y() + M(0, 2),
-                   y = M(1, 0) * q[k].x() + M(1, 1) * q[k].y() + M(1, 2);
-      if (x < 1 || y < 1 || x >= dst.width - 3 || y >= dst.height - 3) return false;
-      m += wi[k] = sample_cubic(dst, x, y);
-    }
+    for (int k = 0; k < n; ++k) m += wi[k];
     m /= n;
     double var = 0;
     for (int k = 0; k < n; ++k) var += (wi[k] - m) * (wi[k] - m);
