@@ -17,6 +17,18 @@ using VI4 = int __attribute__((vector_size(16)));
 template <class V>
 using VInt = VI4;
 
+// The plain loop over points [k0, n): the reference, and every width's tail. The bounds test is
+// written as "inside" so that a NaN position (a degenerate warp) is outside too.
+bool sample_plain(const GrayView& g, const Warp& w, const float* qx, const float* qy, int k0, int n,
+                  float* out) {
+  for (int k = k0; k < n; ++k) {
+    const float x = w.m[0] * qx[k] + w.m[1] * qy[k] + w.m[2], y = w.m[3] * qx[k] + w.m[4] * qy[k] + w.m[5];
+    if (!(x >= 1 && y >= 1 && x < g.width - 3 && y < g.height - 3)) return false;
+    out[k] = sample_cubic(g, x, y);
+  }
+  return true;
+}
+
 // base[idx] per lane.
 template <class V>
 NANEYE_SIMD_INLINE void gather(const float* base, const VInt<V>& idx, V& v) {
@@ -67,12 +79,7 @@ NANEYE_SIMD_INLINE bool sample_v(const GrayView& g, const Warp& w, const float* 
     }
     store(out + k, acc);
   }
-  for (; k < n; ++k) {
-    const float x = w.m[0] * qx[k] + w.m[1] * qy[k] + w.m[2], y = w.m[3] * qx[k] + w.m[4] * qy[k] + w.m[5];
-    if (!(x >= 1 && y >= 1 && x < g.width - 3 && y < g.height - 3)) return false;
-    out[k] = sample_cubic(g, x, y);
-  }
-  return true;
+  return sample_plain(g, w, qx, qy, k, n, out);
 }
 
 bool sample_sse(const GrayView& g, const Warp& w, const float* qx, const float* qy, int n, float* out) {
@@ -132,12 +139,7 @@ __attribute__((target("avx2"))) bool sample_avx2(const GrayView& g, const Warp& 
     }
     _mm256_storeu_ps(out + k, acc);
   }
-  for (; k < n; ++k) {
-    const float x = w.m[0] * qx[k] + w.m[1] * qy[k] + w.m[2], y = w.m[3] * qx[k] + w.m[4] * qy[k] + w.m[5];
-    if (!(x >= 1 && y >= 1 && x < g.width - 3 && y < g.height - 3)) return false;
-    out[k] = sample_cubic(g, x, y);
-  }
-  return true;
+  return sample_plain(g, w, qx, qy, k, n, out);
 }
 }  // namespace
 
@@ -153,12 +155,7 @@ bool sample_window_lanes(int lanes, const GrayView& dst, const Warp& w, const fl
                          int n, float* out) {
   if (lanes == 8) return sample_avx2(dst, w, qx, qy, n, out);
   if (lanes == 4) return sample_sse(dst, w, qx, qy, n, out);
-  for (int k = 0; k < n; ++k) {
-    const float x = w.m[0] * qx[k] + w.m[1] * qy[k] + w.m[2], y = w.m[3] * qx[k] + w.m[4] * qy[k] + w.m[5];
-    if (!(x >= 1 && y >= 1 && x < dst.width - 3 && y < dst.height - 3)) return false;
-    out[k] = sample_cubic(dst, x, y);
-  }
-  return true;
+  return sample_plain(dst, w, qx, qy, 0, n, out);
 }
 
 }  // namespace naneye::recon::scene::lk_sample
