@@ -262,65 +262,73 @@ NANEYE_SGM_INLINE int hmin(typename Vec<B>::H v) {
   return v[0];
 }
 
-// Eq. 13 (path_scalar) on L disparities from d.
+// Eq. 13 (path_scalar) on L disparities from d; jump = min_k L_r(p - r, k) + P2 is formed here
+// rather than kept per path (four fewer live registers in the forward loop).
 template <int B>
 NANEYE_SGM_INLINE typename Vec<B>::H path_v(const std::int16_t* prev, int d, typename Vec<B>::H prev_min,
-                                            typename Vec<B>::H jump, typename Vec<B>::H p1,
+                                            typename Vec<B>::H p1, typename Vec<B>::H p2,
                                             typename Vec<B>::H c) {
   using V = typename Vec<B>::H;
   const V a = load<V>(prev + 1 + d), lo = load<V>(prev + d) + p1, hi = load<V>(prev + 2 + d) + p1;
-  return vmin(vmin(a, lo), vmin(hi, jump)) + c - prev_min;
+  return vmin(vmin(a, lo), vmin(hi, prev_min + p2)) + c - prev_min;
 }
 
+// The four forward paths written out (no arrays of vectors: GCC kept those in memory).
 template <int B>
 NANEYE_SGM_INLINE void aggregate_v(const PathRow& r) {
   using V = typename Vec<B>::H;
   constexpr int L = Vec<B>::k16;
-  const int D = r.D, Ds = D + 2;
-  const V p1 = V{} + r.p1;
+  const int D = r.D;
+  const std::size_t Ds = static_cast<std::size_t>(D) + 2;
+  const V p1 = V{} + r.p1, p2 = V{} + r.p2;
   int h_min = 0;
   for (int x = r.lo; x < r.hi; ++x) {
     const std::int16_t* c = r.cost + static_cast<std::size_t>(x) * D;
     std::int16_t* s = r.sum + static_cast<std::size_t>(x) * D;
-    Pred p[4] = {x > r.lo ? Pred{r.horiz[(x - 1) & 1], h_min} : Pred{r.start, 0}, above(r, 0, x - 1),
-                 above(r, 1, x), above(r, 2, x + 1)};
-    std::int16_t* o[4] = {r.horiz[x & 1], r.cur[0] + static_cast<std::size_t>(x) * Ds,
-                          r.cur[1] + static_cast<std::size_t>(x) * Ds,
-                          r.cur[2] + static_cast<std::size_t>(x) * Ds};
-    V pm[4], jump[4], mins[4];
-    for (int k = 0; k < 4; ++k) {
-      pm[k] = V{} + static_cast<std::int16_t>(p[k].min);
-      jump[k] = V{} + static_cast<std::int16_t>(p[k].min + r.p2);
-      mins[k] = V{} + kPad;
-    }
+    const Pred q0 = x > r.lo ? Pred{r.horiz[(x - 1) & 1], h_min} : Pred{r.start, 0};
+    const Pred q1 = above(r, 0, x - 1), q2 = above(r, 1, x), q3 = above(r, 2, x + 1);
+    std::int16_t* o0 = r.horiz[x & 1];
+    std::int16_t* o1 = r.cur[0] + static_cast<std::size_t>(x) * Ds;
+    std::int16_t* o2 = r.cur[1] + static_cast<std::size_t>(x) * Ds;
+    std::int16_t* o3 = r.cur[2] + static_cast<std::size_t>(x) * Ds;
+    const V pm0 = V{} + static_cast<std::int16_t>(q0.min), pm1 = V{} + static_cast<std::int16_t>(q1.min);
+    const V pm2 = V{} + static_cast<std::int16_t>(q2.min), pm3 = V{} + static_cast<std::int16_t>(q3.min);
+    V m0 = V{} + kPad, m1 = m0, m2 = m0, m3 = m0;
     for (int d = 0; d < D; d += L) {
       const V cv = load<V>(c + d);
-      V sum = V{};
-      for (int k = 0; k < 4; ++k) {
-        const V v = path_v<B>(p[k].block, d, pm[k], jump[k], p1, cv);
-        store(o[k] + 1 + d, v);
-        mins[k] = vmin(mins[k], v);
-        sum += v;
-      }
-      store(s + d, sum);
+      const V v0 = path_v<B>(q0.block, d, pm0, p1, p2, cv);
+      const V v1 = path_v<B>(q1.block, d, pm1, p1, p2, cv);
+      const V v2 = path_v<B>(q2.block, d, pm2, p1, p2, cv);
+      const V v3 = path_v<B>(q3.block, d, pm3, p1, p2, cv);
+      store(o0 + 1 + d, v0);
+      store(o1 + 1 + d, v1);
+      store(o2 + 1 + d, v2);
+      store(o3 + 1 + d, v3);
+      m0 = vmin(m0, v0);
+      m1 = vmin(m1, v1);
+      m2 = vmin(m2, v2);
+      m3 = vmin(m3, v3);
+      store(s + d, (v0 + v1) + (v2 + v3));  // exact in int16 (S < kPad): any order gives the same bits
     }
-    h_min = hmin<B>(mins[0]);
-    for (int k = 0; k < 3; ++k) r.cur_min[k][x] = static_cast<std::int16_t>(hmin<B>(mins[k + 1]));
+    h_min = hmin<B>(m0);
+    r.cur_min[0][x] = static_cast<std::int16_t>(hmin<B>(m1));
+    r.cur_min[1][x] = static_cast<std::int16_t>(hmin<B>(m2));
+    r.cur_min[2][x] = static_cast<std::int16_t>(hmin<B>(m3));
   }
   for (int x = r.hi - 1; x >= r.lo; --x) {
     const std::int16_t* c = r.cost + static_cast<std::size_t>(x) * D;
     std::int16_t* s = r.sum + static_cast<std::size_t>(x) * D;
-    const Pred p = x < r.hi - 1 ? Pred{r.horiz_back[(x + 1) & 1], h_min} : Pred{r.start, 0};
+    const Pred q = x < r.hi - 1 ? Pred{r.horiz_back[(x + 1) & 1], h_min} : Pred{r.start, 0};
     std::int16_t* o = r.horiz_back[x & 1];
-    const V pm = V{} + static_cast<std::int16_t>(p.min), jump = V{} + static_cast<std::int16_t>(p.min + r.p2);
-    V mins = V{} + kPad;
+    const V pm = V{} + static_cast<std::int16_t>(q.min);
+    V m = V{} + kPad;
     for (int d = 0; d < D; d += L) {
-      const V v = path_v<B>(p.block, d, pm, jump, p1, load<V>(c + d));
+      const V v = path_v<B>(q.block, d, pm, p1, p2, load<V>(c + d));
       store(o + 1 + d, v);
-      mins = vmin(mins, v);
+      m = vmin(m, v);
       store(s + d, load<V>(s + d) + v);
     }
-    h_min = hmin<B>(mins);
+    h_min = hmin<B>(m);
   }
 }
 
