@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <opencv2/calib3d.hpp>
 
 #include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "select.hpp"
+#include "sgm.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -21,30 +21,24 @@ inline int round_half_away(float v) {
   return i + (f >= 0.5f) - (f <= -0.5f);
 }
 
-cv::Ptr<cv::StereoSGBM> make_sgbm(const MatcherSettings& s) {
-  // P1, P2: the penalties OpenCV documents for 8-bit images (8 and 32 x channels x block area);
-  // no uniqueness or speckle filtering: validity is decided after the sub-pixel step. The
-  // left-right check is SGBM's own (disp12MaxDiff): the right view's disparities are the minima of
-  // the same aggregated cost along each right pixel's diagonal, so one run gives both views (a
-  // second run on the mirrored pair cost as much again and lowered bad-5 by at most 0.01 point,
-  // docs/scene.md).
-  const int area = s.sgm_block * s.sgm_block;
-  // SGBM compares the right view's integer disparity with both roundings of the left's (passing if
-  // either is within disp12MaxDiff): the bracket adds up to 1 px, so a tolerance of t px on the
-  // disparity is disp12MaxDiff = t - 1.
-  const int lr = std::max(0, static_cast<int>(std::lround(s.lr_tolerance_px)) - 1);
-  return cv::StereoSGBM::create(s.min_disparity, s.num_disparities, s.sgm_block, 8 * area, 32 * area, lr, 0,
-                                0, 0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
+SgmSettings sgm_settings(const MatcherSettings& s) {
+  SgmSettings g;
+  g.min_disparity = s.min_disparity;
+  g.num_disparities = s.num_disparities;
+  g.p1 = s.sgm_p1;
+  g.p2 = s.sgm_p2;
+  // The check compares the right view's integer disparity with both roundings of the left's
+  // (passing if either is within lr_max_diff): the bracket adds up to 1 px, so a tolerance of t px
+  // on the disparity is lr_max_diff = t - 1 (cv::StereoSGBM's disp12MaxDiff, the same rule).
+  g.lr_max_diff = std::max(0, static_cast<int>(std::lround(s.lr_tolerance_px)) - 1);
+  return g;
 }
 }  // namespace
 
 RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings& s)
     : s_(s), w_(width), h_(height) {
-  sgbm_ = make_sgbm(s_);
+  sgm_ = std::make_unique<Sgm>(w_, h_, sgm_settings(s_));
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
-  l8_.create(h_, w_, CV_8UC1);
-  r8_.create(h_, w_, CV_8UC1);
-  d16_.create(h_, w_, CV_16SC1);
   integer_.create(h_, w_, CV_32FC1);
   disp_.create(h_, w_, CV_32FC1);
   sigma_.create(h_, w_, CV_32FC1);
@@ -69,7 +63,7 @@ void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv
                              const cv::Mat& valid_right) {
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
   update_spans(valid_left);
-  integer_stage(left, right, valid_left, valid_right);
+  integer_stage(left, right);
   refine(left, right, valid_left, valid_right);
   validate(valid_left);
 }
@@ -94,28 +88,9 @@ void RectifiedMatcher::update_spans(const cv::Mat& valid_left) {
   }
 }
 
-void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                                     const cv::Mat& valid_right) {
-  // SGBM wants 8 bits: both eyes on one scale, the brightest valid pixel at 255 (the pair's own
-  // range, whatever the exposure).
-  float hi = 1e-6f;
-  for (int y = 0; y < h_; ++y) {
-    const float* l = left.ptr<float>(y);
-    const float* r = right.ptr<float>(y);
-    const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
-    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w_; ++x) hi = std::max({hi, vl[x] ? l[x] : 0.f, vr[x] ? r[x] : 0.f});
-  }
-  const double scale = 255.0 / hi;
-  left.convertTo(l8_, CV_8U, scale);
-  right.convertTo(r8_, CV_8U, scale);
-  sgbm_->compute(l8_, r8_, d16_);
-  const int invalid = (s_.min_disparity - 1) * 16;
-  for (int y = 0; y < h_; ++y) {
-    const short* dl = d16_.ptr<short>(y);
-    float* ol = integer_.ptr<float>(y);
-    for (int x = 0; x < w_; ++x) ol[x] = dl[x] <= invalid ? kNoMatch : dl[x] / 16.f;
-  }
+void RectifiedMatcher::integer_stage(const cv::Mat& left, const cv::Mat& right) {
+  // On the float images (census needs no 8-bit scale), the left data's spans only.
+  sgm_->run(left, right, span_lo_.data(), span_hi_.data(), integer_);
 }
 
 void RectifiedMatcher::level_medians(float min_n) {
@@ -218,8 +193,8 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       ++c.candidates;
       const float d = d_[i];
       if (!std::isfinite(sg[x])) {
-        // SGBM matches every column from min + number of disparities on (no uniqueness or speckle
-        // filter): a pixel it left without one there failed its left-right check.
+        // The SGM matches every column of the spans from min + number of disparities on (no
+        // uniqueness or speckle filter): a pixel it left without one there failed its left-right check.
         ++(x >= matchable_from ? c.left_right : c.no_integer);
         continue;
       }

@@ -146,9 +146,8 @@ TEST(SceneMode, AllocatesNothingPerPairOnceWarmMonoAndBayer) {
   expect_no_allocation_per_pair(false);
 }
 
-// Disabled while the dense path's first version allocates per pair (72 allocations a pair, mono and
-// Bayer, measured here: cv::StereoSGBM::compute sizes its buffers on every call); enable it when
-// recon/scene/dense* is allocation-free once warm, as dense.hpp promises.
-TEST(SceneMode, DISABLED_AllocatesNothingPerPairOnceWarmWithTheDenseMap) {
+// With the dense map too: its integer stage is our own SGM since 2026-12-04 (recon/scene/sgm.hpp,
+// buffers sized at construction); cv::StereoSGBM::compute allocated 72 times a pair here before.
+TEST(SceneMode, AllocatesNothingPerPairOnceWarmWithTheDenseMap) {
   expect_no_allocation_per_pair(true);
 }

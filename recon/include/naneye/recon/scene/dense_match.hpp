@@ -2,9 +2,9 @@
 // The dense matcher on a rectified pair (rows are epipolar lines, d = u_left - u_right >= 0), its
 // own unit so that it runs on any rectified images (the NanEye pair after dense_rectify, Middlebury's
 // Aloe in the tests). docs/scene.md, "Dense path":
-//   1. integer stage: OpenCV's semi-global matcher (Hirschmueller, PAMI 2008) over the disparity
-//      band, with none of its own validity filters (uniqueness, left-right, speckle): those
-//      decisions are ours, below;
+//   1. integer stage: our semi-global matcher (scene/sgm.hpp; Hirschmueller, PAMI 2008) over the
+//      disparity band, census cost, five paths, its left-right check, no uniqueness or speckle
+//      filter: the other decisions are ours, below;
 //   2. sub-pixel: Gauss-Newton on the rectified pixels, every pixel's own window with a gain and an
 //      offset between the eyes (L = a R(x - d) + b), right image sampled by Keys' cubic convolution
 //      (Keys 1981), each pixel of the window warped by its own disparity (so slanted surfaces keep
@@ -14,8 +14,8 @@
 //      itself (interpolation and a Bayer filter make neighbouring pixels' noise correlated);
 //   4. validity: refinement converged near the integer stage; sigma small enough that the integer
 //      stage's half-pixel basin holds at 3 sigma; the residual consistent with the pair's noise
-//      (a chi-square test against the median window); a left-right check (SGBM's own: the right
-//      view's disparities from the same aggregated cost must agree); not occluded (no nearer
+//      (a chi-square test against the median window); a left-right check (the integer stage's: the
+//      right view's disparities from the same aggregated cost must agree); not occluded (no nearer
 //      surface claims the same right pixel); every tap inside both eyes' valid masks.
 #include <array>
 #include <cstdint>
@@ -24,21 +24,25 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-namespace cv {
-class StereoSGBM;
-}
-
 namespace naneye::recon::scene {
+
+class Sgm;
 
 // What disparity() and sigma() hold where there is no match.
 inline constexpr float kNoMatch = std::numeric_limits<float>::quiet_NaN();
 
 struct MatcherSettings {
   int min_disparity = 0;     // px; smallest disparity searched
-  int num_disparities = 48;  // px; band width (SGBM wants a multiple of 16)
-  int sgm_block = 5;         // px; SGBM's matching block (odd)
-  int radius = 3;            // px; sub-pixel window (2 r + 1)^2
-  int iterations = 4;        // Gauss-Newton steps (each pixel converges in 2-3 from SGBM's start)
+  int num_disparities = 48;  // px; band width (a multiple of 16: the SGM's vector width)
+  // SGM penalties (Hirschmueller 2008, Eq. 13) in the cost's unit, bits of the 3 x 3 block's summed
+  // 5 x 5 census distance (0 .. 216; a wrong match costs ~12 bits a pixel, a right one on this
+  // camera's noise 2-4): P1 = 2 bits a pixel lets a slanted surface step by 1 px, P2 = 8 bits a
+  // pixel (~ the right-wrong gap) holds the disparity across a texture-poor stretch. Chosen on
+  // bench_scene and Aloe (docs/scene.md).
+  int sgm_p1 = 2 * 9;
+  int sgm_p2 = 8 * 9;
+  int radius = 3;      // px; sub-pixel window (2 r + 1)^2
+  int iterations = 4;  // Gauss-Newton steps (each pixel converges in 2-3 from SGBM's start)
   // The integer stage is trusted to +-0.5 px: a match whose disparity sigma exceeds a third of
   // that could sit in the wrong basin undetected (3 sigma).
   double max_sigma_px = 0.5 / 3;
@@ -48,8 +52,14 @@ struct MatcherSettings {
   // Residual test: a window whose residual variance exceeds the median window's by the chi-square
   // upper quantile at this probability (its effective degrees of freedom) is not the same surface.
   double residual_p = 1e-3;
-  double lr_tolerance_px = 1.0;  // px; left-right check (SGBM's own recommendation: 1)
-  double occlusion_px = 1.0;     // px; a nearer surface claiming the same right pixel by more
+  // px; left-right check (sgm.hpp: the right view's integer disparity against both roundings of the
+  // left's, within t - 1). 2, not cv::StereoSGBM's customary 1: with the census cost the right view,
+  // the argmin of S along a diagonal, compares different left pixels' S, whose levels follow their
+  // texture's contrast, and lands one further pixel off more often; at 1 px the check refused 3x as
+  // many pixels as SGBM's did (plane: 12 058 against 3 864) and cost 10 points of coverage for no
+  // lower bad-5 (docs/scene.md). The later tests (shift, residual, occlusion) keep bad-5 as it was.
+  double lr_tolerance_px = 2.0;
+  double occlusion_px = 1.0;  // px; a nearer surface claiming the same right pixel by more
   // Smallest share of the window's pixels that must carry data (near the domain's edges).
   double min_window_share = 0.5;
 };
@@ -57,13 +67,13 @@ struct MatcherSettings {
 // Why pixels have no disparity, one pair (each pixel counted at the first test it fails).
 struct MatchCounts {
   int candidates = 0;  // pixels with left data
-  int no_integer = 0;  // SGBM gave none
+  int no_integer = 0;  // the integer stage gave none (the band leaves the right image)
   int window = 0;      // too few window pixels with data in both eyes, or a singular fit
   int shift = 0;       // refinement slid more than max_shift_px from the integer stage
   int texture = 0;     // sigma above max_sigma_px
   int converged = 0;   // the reference field still moving by more than sigma
   int residual = 0;    // residual above the pair's noise (chi-square)
-  int left_right = 0;  // SGBM's left-right check refused it (counted before the tests below)
+  int left_right = 0;  // the integer stage's left-right check refused it (counted before the tests below)
   int occluded = 0;    // a nearer surface claims the same right pixel
   int valid = 0;
 };
@@ -78,7 +88,7 @@ class RectifiedMatcher {
              const cv::Mat& valid_right);
   const cv::Mat& disparity() const { return disp_; }
   const cv::Mat& sigma() const { return sigma_; }
-  // SGBM's own result (its 1/16 px parabola; NaN where it gave none), for comparisons.
+  // The integer stage's result (its parabola; NaN where it gave none), for comparisons.
   const cv::Mat& integer_stage() const { return integer_; }
   const MatchCounts& counts() const { return counts_; }
   double residual_sigma() const { return residual_sigma_; }  // median window's, input units
@@ -86,8 +96,7 @@ class RectifiedMatcher {
   const MatcherSettings& settings() const { return s_; }
 
  private:
-  void integer_stage(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                     const cv::Mat& valid_right);
+  void integer_stage(const cv::Mat& left, const cv::Mat& right);
   void refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
               const cv::Mat& valid_right);
   void validate(const cv::Mat& valid_left);
@@ -116,8 +125,8 @@ class RectifiedMatcher {
 
   MatcherSettings s_;
   int w_, h_;
-  cv::Ptr<cv::StereoSGBM> sgbm_;
-  cv::Mat l8_, r8_, d16_, integer_;
+  std::unique_ptr<Sgm> sgm_;
+  cv::Mat integer_;
   cv::Mat disp_, sigma_;
   // Per pixel: the Gauss-Newton state (disparity, gain, offset, last step times gain, residual
   // variance, noise correlation factor, window count, (A^-1)_cc) and the window sums
