@@ -236,26 +236,40 @@ bool CornerDetector::track(const CornerResult& previous, CornerResult& out, bool
 bool CornerDetector::full_search(CornerResult& out) {
   const LumaView v = luma_view();
   bool found = coarse_finder_.find(v, settings_.board.rows, settings_.board.cols, coarse_.data(), &noise_);
+  bool from_opencv = false;
   if (!found && settings_.opencv_fallback) {
-    found = coarse_grid_opencv(v, settings_.board.rows, settings_.board.cols, gray8_, coarse_);
+    found = from_opencv = coarse_grid_opencv(v, settings_.board.rows, settings_.board.cols, gray8_, coarse_);
   }
   if (!found) {
     failure_ = CornerFailure::no_grid;
     return false;
   }
-  out.count = settings_.board.rows * settings_.board.cols;
-  for (int i = 0; i < out.count; ++i) {
-    Corner& c = out.corners[static_cast<std::size_t>(i)];
-    c = Corner{};
-    c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
-  }
-  canonical_order(out);
-  if (!refine_all(out, false) || !validate(out)) {
+  // A grid the fit or the validation refuses may be a texture's lattice found before the board's:
+  // the lattice search goes on. The first refusal is what last_failure() reports when none passes.
+  CornerFailure first_failure = CornerFailure::none;
+  CornerRejection first_rejection;
+  while (found) {
+    out.count = settings_.board.rows * settings_.board.cols;
+    for (int i = 0; i < out.count; ++i) {
+      Corner& c = out.corners[static_cast<std::size_t>(i)];
+      c = Corner{};
+      c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
+    }
+    canonical_order(out);
+    if (refine_all(out, false) && validate(out)) {
+      out.found = true;
+      return true;
+    }
     out.count = 0;
-    return false;
+    if (first_failure == CornerFailure::none) {
+      first_failure = failure_;
+      first_rejection = rejection_;
+    }
+    found = !from_opencv && coarse_finder_.find_next(coarse_.data());
   }
-  out.found = true;
-  return true;
+  failure_ = first_failure;
+  rejection_ = first_rejection;
+  return false;
 }
 
 bool CornerDetector::validate(const CornerResult& out) {

@@ -137,7 +137,7 @@ void init_linear(FastFitScratch& w, int n, Vec& p) {
 template <int K>
 int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 11>& active,
                         int max_iterations, double tolerance_px, double trust_px, double lambda,
-                        bool shape_ready, double& cost) {
+                        bool shape_ready, double& cost, double& position_var) {
   constexpr int n_active = K;
   MatK<K> JtJ, JtJ2;
   VecK<K> Jtr, Jtr2;
@@ -178,6 +178,12 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
       if (lambda > 1e8) break;
     }
   }
+  // The position block of the normal equations' inverse (the corner is parameters 0 and 1 in both
+  // orders), at the last point where they were formed: within the last short step of the solution.
+  const MatK<K> inv = JtJ.ldlt().solve(MatK<K>::Identity());
+  const Eigen::Matrix2d cq = inv.template topLeftCorner<2, 2>();
+  const double mid = 0.5 * (cq(0, 0) + cq(1, 1)), det = cq(0, 0) * cq(1, 1) - cq(0, 1) * cq(1, 0);
+  position_var = mid + std::sqrt(std::max(mid * mid - det, 0.0));
   return it + 1;
 }
 
@@ -329,13 +335,13 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     init_linear(w, n, p);
   }
   // With the edges fixed the problem is nearly linear around a close start: (almost) Gauss-Newton.
-  double cost = 0;
+  double cost = 0, position_var = 0;
   const bool shaped = !init.shading.valid;
   auto fit = [&](bool shape_ready) {
     return edges ? levenberg_marquardt<9>(w, n, p, kFixedEdges, max_iterations, tolerance_px, kTrustStepPx,
-                                          1e-6, shape_ready, cost)
+                                          1e-6, shape_ready, cost, position_var)
                  : levenberg_marquardt<11>(w, n, p, kFull, max_iterations, tolerance_px, 0.0, 1e-3,
-                                           shape_ready, cost);
+                                           shape_ready, cost, position_var);
   };
   out.iterations = fit(shaped);
   double used = static_cast<double>(w.wt.head(n).sum());
@@ -373,6 +379,7 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   out.contrast = std::abs(p[8]);
   out.rms = std::sqrt(cost / std::max(1.0, used));
   out.weight = used;
+  out.position_var_per_noise = std::isfinite(position_var) ? position_var : 1e30;
   out.undistorted = undist;
   const Eigen::Vector2d q(p[0], p[1]);
   if (!p.allFinite() || q.cwiseAbs().maxCoeff() > half) return false;

@@ -64,12 +64,16 @@ int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col
 }
 
 int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& dc,
-                      const Eigen::Vector2d& dr) {
+                      const Eigen::Vector2d& dr, bool square_centres) {
   // Quadrant centres at 0.35 of the spacing along each diagonal; for a corner near the image border
   // (every corner in view, but the outer squares cut by the edge) closer, down to 0.18, as long as the
   // samples stay >= 2.5 px from the corner (outside its blur, a few tenths of a pixel here).
+  // Squares under ~5 px (a far board) put 0.35 of the diagonal closer than that: there the samples
+  // go to the squares' centres (0.5), the points farthest from every edge the grid has (half a
+  // square from each: 2 px for 4 px squares, 2 blurs of the real sensor's ~1 px).
   float va = -1, vb = -1, vc = -1, vd = -1;
-  for (const double f : {0.35, 0.25, 0.18}) {
+  const bool small = square_centres && std::min((0.35 * (dc + dr)).norm(), (0.35 * (dc - dr)).norm()) < 2.5;
+  for (const double f : {small ? 0.5 : 0.35, 0.25, 0.18}) {
     const Eigen::Vector2d s1 = f * (dc + dr), s2 = f * (dc - dr);
     if (std::min(s1.norm(), s2.norm()) < 2.5) break;
     const Eigen::Vector2d a = p + s1, b = p - s1, c = p + s2, d = p - s2;

@@ -233,14 +233,31 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
   };
   // Quadrant polarity of every cell (0: no X-junction, or no neighbour to measure its steps by),
   // times the lattice's alternation, so that all X-junctions of one board share one sign.
+  // A far board's squares are sampled at their centres (quadrant_polarity), but only at cells whose
+  // steps are the component's own (within the lattice tolerance of its median step): a false link
+  // between a board's saddle and clutter has a short step too, and its square centres would sit on
+  // no square (seen on OpenCV's left04, where such a cell let a wrong placement through).
+  std::array<float, kMaxCells> step_len{};
+  int with_steps = 0;
+  for (int k = 0; k < n; ++k) {
+    Eigen::Vector2d dc, dr;
+    if (steps(cells[static_cast<std::size_t>(k)][0], cells[static_cast<std::size_t>(k)][1], dc, dr)) {
+      step_len[static_cast<std::size_t>(with_steps++)] = static_cast<float>(std::min(dc.norm(), dr.norm()));
+    }
+  }
+  std::nth_element(step_len.begin(), step_len.begin() + with_steps / 2, step_len.begin() + with_steps);
+  const double median_step = with_steps > 0 ? step_len[static_cast<std::size_t>(with_steps / 2)] : 0.0;
   std::array<int, kMaxCells> sign{};
   for (int k = 0; k < n; ++k) {
     const int ci = cells[static_cast<std::size_t>(k)][0], cj = cells[static_cast<std::size_t>(k)][1];
     Eigen::Vector2d dc, dr;
+    const bool has_steps = steps(ci, cj, dc, dr);
+    const bool own_steps =
+        has_steps && std::min(dc.norm(), dr.norm()) >= (1.0 - s_.lattice_tolerance) * median_step;
     const int pol =
-        steps(ci, cj, dc, dr)
-            ? quadrant_polarity(*img_, cand_[static_cast<std::size_t>(at(ci, cj))].px.cast<double>(), dc, dr)
-            : 0;
+        has_steps ? quadrant_polarity(*img_, cand_[static_cast<std::size_t>(at(ci, cj))].px.cast<double>(),
+                                      dc, dr, own_steps)
+                  : 0;
     sign[static_cast<std::size_t>(k)] = (ci + cj) % 2 == 0 ? pol : -pol;
   }
   int placements = 0, uncertain = 0, pi = 0, pj = 0;
@@ -301,6 +318,8 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
 bool CoarseGridFinder::find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out,
                             const NoiseModel* noise) {
   count_ = 0;
+  grid_count_ = -1;
+  usable_ = next_k_ = tried_ = 0;
   noise_ = noise;
   img_ = &img;
   if (img.width != width_ || img.height != height_ || rows < 2 || cols < 2 || rows * cols > kMaxCorners) {
@@ -317,20 +336,36 @@ bool CoarseGridFinder::find(const LumaView& img, int rows, int cols, Eigen::Vect
     }
     cell_of_[static_cast<std::size_t>(i)] = -1;
   }
+  usable_ = usable;
+  next_k_ = 0;
+  tried_ = 0;
+  stamp_ = 0;
+  rows_ = rows;
+  cols_ = cols;
   if (usable + kMaxFilledHoles < rows * cols) return false;  // even with every hole the lattice may fill
   std::sort(order_.begin(), order_.begin() + usable, [&](int x, int y) {
     return cand_[static_cast<std::size_t>(x)].response > cand_[static_cast<std::size_t>(y)].response;
   });
-  // Seeds from the strongest saddle down; a seed already in an earlier (incomplete) component would
-  // only grow the same component again.
-  int tried = 0;
-  stamp_ = 0;
-  for (int k = 0; k < usable && tried < s_.max_seeds; ++k) {
-    const int seed = order_[static_cast<std::size_t>(k)];
+  return find_next(out);
+}
+
+bool CoarseGridFinder::find_next(Eigen::Vector2f* out) {
+  // Seeds from the strongest saddle down; a seed already in an earlier component (incomplete, or a
+  // grid the fit refused) would only grow the same component again. The holes a returned grid
+  // filled are its own: dropped before the next growth.
+  if (grid_count_ >= 0) count_ = grid_count_;
+  grid_count_ = -1;
+  while (next_k_ < usable_ && tried_ < s_.max_seeds) {
+    const int seed = order_[static_cast<std::size_t>(next_k_++)];
     if (cell_of_[static_cast<std::size_t>(seed)] >= 0) continue;
-    ++tried;
-    const int r = grow(seed, rows, cols, out);
-    if (r != 0) return r > 0;
+    ++tried_;
+    const int before = count_;
+    const int r = grow(seed, rows_, cols_, out);
+    if (r > 0) grid_count_ = before;
+    if (r != 0) {
+      if (r < 0) next_k_ = usable_;  // a larger board or two placements: nothing is certain
+      return r > 0;
+    }
   }
   return false;
 }

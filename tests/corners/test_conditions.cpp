@@ -4,6 +4,7 @@
 // depend on the channel gains.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -22,6 +23,12 @@ constexpr int kPairsPerCondition = 2;
 struct PairSource {
   std::uint64_t pose_seed = 31, noise_seed = 700;
   int pairs = kPairsPerCondition;
+  // Only these of the first `pairs` (the poses of the others are drawn and skipped); empty: all.
+  std::vector<int> only = {};
+  // Found in every pair even where the condition does not expect it (pairs known to be found).
+  bool expect_found = false;
+  // Bounds on the unflagged corners (px): where the truth has them, see check_condition.
+  double worst_px = 0.25, rms_px = 0.08;
 };
 
 void check_condition(const test::ImagingCondition& cond, const PairSource& src = {}) {
@@ -32,8 +39,10 @@ void check_condition(const test::ImagingCondition& cond, const PairSource& src =
   int in_view = 0, found = 0;
   double worst = 0, sum2 = 0, worst_flagged = 0;
   int n = 0, flagged = 0;
+  const int expected_pairs = src.only.empty() ? src.pairs : static_cast<int>(src.only.size());
   for (int k = 0; k < src.pairs; ++k) {
     const sim::Pose pose = test::condition_pose(cond, rig, poses);
+    if (!src.only.empty() && std::find(src.only.begin(), src.only.end(), k) == src.only.end()) continue;
     sim::Rng rng(src.noise_seed + static_cast<std::uint64_t>(k));
     const sim::RenderedPair p = renderer.render(pose, rng);
     if (!p.truth.board_in_view) continue;
@@ -42,7 +51,7 @@ void check_condition(const test::ImagingCondition& cond, const PairSource& src =
       CornerDetector& det = is_left ? left : right;
       CornerResult res;
       const bool ok = det.detect_full(sim::raw_view(is_left ? p.left : p.right, cond.sensor.bayer), res);
-      if (cond.expect_found) {
+      if (cond.expect_found || src.expect_found) {
         EXPECT_TRUE(ok) << cond.name << " pair " << k << (is_left ? " left: " : " right: ")
                         << to_string(det.last_failure());
       }
@@ -72,13 +81,13 @@ void check_condition(const test::ImagingCondition& cond, const PairSource& src =
               cond.name.c_str(), in_view, n, rms, worst, flagged, worst_flagged);
   // Geometry conditions draw only poses with every inner corner in view.
   if (cond.poses) {
-    EXPECT_EQ(in_view, src.pairs) << cond.name;
+    EXPECT_EQ(in_view, expected_pairs) << cond.name;
   }
   EXPECT_GE(in_view, 1) << cond.name;
   // No false corner: every unflagged corner where the truth has it (OpenCV's path: 0.1-0.4 px RMS),
   // the flagged ones within 0.5 px (bench_conditions' bound for a false corner).
-  EXPECT_LE(worst, 0.25) << cond.name;
-  EXPECT_LE(rms, 0.08) << cond.name;
+  EXPECT_LE(worst, src.worst_px) << cond.name;
+  EXPECT_LE(rms, src.rms_px) << cond.name;
   EXPECT_LE(worst_flagged, 0.5) << cond.name;
 }
 
@@ -91,6 +100,15 @@ void check_conditions(const std::string& prefix, const PairSource& src = {}) {
     ++checked;
   }
   EXPECT_GE(checked, 1) << prefix;
+}
+
+// The index of the condition named `name` in imaging_conditions().
+std::size_t condition_index(const std::string& name) {
+  const auto conds = test::imaging_conditions();
+  for (std::size_t i = 0; i < conds.size(); ++i)
+    if (conds[i].name == name) return i;
+  ADD_FAILURE() << "no condition " << name;
+  return 0;
 }
 
 TEST(Conditions, EveryConditionFindsEveryInViewBoardWithoutFalseCorners) {
@@ -126,9 +144,25 @@ TEST(Conditions, CloseClippedBoardsWithoutASaddleAreFound) {
   check_conditions("close at 36-50 mm, exposure for 70 mm", PairSource{1212, 4000, 5});
 }
 
-// Squares of ~4-6 px: not found yet (nor by OpenCV), but never a false corner.
+// Squares of ~4-6 px: not all found yet (nor by OpenCV), but never a false corner.
 TEST(Conditions, FarBoardsGiveNoFalseCorners) {
   check_conditions("far: ");
+}
+
+// Squares of ~5 px (200-260 mm): bench_conditions' pairs found since this session's changes, all
+// refused before (docs/corners.md, "Far boards"). Mono pair 6 and Bayer pair 6 had no grid: the
+// lattice's quadrant test sampled 0.35 of the diagonal, < 2.5 px from the corner, and gave no sign;
+// it now samples the squares' centres. Bayer pair 1 (right eye) and then mono pair 4 and Bayer pair 6
+// were refused for a blur of 1.1-1.2 px beyond 0.4 x their 2.6-3.1 px windows: now accepted, flagged,
+// when the fit holds the corner to the noise (position standard error <= 0.1 px). Their windows hold
+// the neighbouring lines' blur, which the one-junction model does not have: unflagged corners within
+// 0.35 px (measured over the bench's 12 pairs: RMS 0.085 px, worst 0.29 px), short of a false corner
+// (0.5 px).
+TEST(Conditions, FarBoardsAreFound) {
+  check_condition(test::imaging_conditions().at(condition_index("far: squares ~5-6 px (200-260 mm), mono")),
+                  PairSource{1212, 4000, 7, {4, 6}, true, 0.35, 0.12});
+  check_condition(test::imaging_conditions().at(condition_index("far: squares ~5-6 px (200-260 mm), Bayer")),
+                  PairSource{1212, 4000, 7, {1, 6}, true, 0.35, 0.12});
 }
 
 TEST(Conditions, NoBoardUnderTheRealSensorGivesNothing) {

@@ -71,6 +71,11 @@ class CoarseGridFinder {
   // a grid with holes, or only part of the board in view gives false. Allocates nothing.
   // With `noise` (of the luminance), the contrast floors follow the frame's noise (settings).
   bool find(const LumaView& img, int rows, int cols, Eigen::Vector2f* out, const NoiseModel* noise = nullptr);
+  // The next grid of the same frame, after the one the last find() / find_next() returned was refused
+  // by the fit or the validation (a fine periodic texture of a photograph can form a lattice of its
+  // own before the board's seeds are tried): the search goes on from the next seed, within the same
+  // max_seeds. False when no other seed gives a grid, or one gives an uncertain placement.
+  bool find_next(Eigen::Vector2f* out);
 
   // The lattice's undistortion: raw pixel -> normalized * fx, bilinear in a table of the exact
   // CameraModel::undistort where that is within kLutTolerancePx of it, else the exact inverse (next
@@ -111,6 +116,8 @@ class CoarseGridFinder {
   std::vector<int> order_, cell_of_;  // usable candidates by response; growth that took each (-1: none)
   std::vector<int> grid_;             // candidate per lattice cell (-1: empty), kSide x kSide
   int count_ = 0;
+  int usable_ = 0, next_k_ = 0, tried_ = 0, rows_ = 0, cols_ = 0;  // the seed loop, resumable (find_next)
+  int grid_count_ = -1;                // count_ before the returned grid's filled holes (-1: none returned)
   float peak_ = 0;                     // the strongest response of the last saddle_map
   int stamp_ = 0;                      // id of the current growth, marks its candidates in cell_of_
   const NoiseModel* noise_ = nullptr;  // of the current find()

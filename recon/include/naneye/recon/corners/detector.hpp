@@ -52,9 +52,10 @@ struct Corner {
   Eigen::Vector2d px{0, 0};  // raw pixel, centres at integers
   int row = 0, col = 0;      // id = row * cols + col
   std::uint8_t flags = 0;
-  double sigma_px = 0;  // fitted blur of the edges
-  double contrast = 0;  // |white - black| at the corner, in DN
-  double residual = 0;  // RMS fit residual, DN
+  double sigma_px = 0;        // fitted blur of the edges
+  double contrast = 0;        // |white - black| at the corner, in DN
+  double residual = 0;        // RMS fit residual, DN
+  double position_se_px = 0;  // standard error of px for the frame's noise (least squares), px
   // Fitted edge directions (radians, in undistorted local pixel coordinates) - reused when tracking.
   double theta_row = 0, theta_col = 0;
   SaddleShading shading{};  // the fit's linear terms at px - reused when tracking
@@ -88,6 +89,7 @@ struct CornerRejection {
   int index = -1;                 // row-major id in the coarse grid's order
   double rms = 0, bound_rms = 0;  // the fit's RMS residual and what the noise and misfit allow, DN
   double contrast = 0, noise_sigma = 0, level = 0, sigma_px = 0, radius_px = 0;
+  double position_se_px = 0;  // the position's standard error for the frame's noise (px)
 };
 
 struct CornerSettings {
@@ -125,6 +127,11 @@ struct CornerSettings {
   // numerical floor); above radius / max_sigma_per_radius the window no longer holds the edge
   // profile's +-2.5 sigma.
   double min_sigma_px = 0.05, max_sigma_per_radius = 0.4;
+  // ... unless the window cannot be larger (a far board: squares of 4-6 px) and the fit still holds
+  // the corner to the noise: its position's standard error (least squares, the frame's noise) within
+  // this (px; a returned corner is false beyond 0.5 px: 5 standard errors). Such corners, and any
+  // corner whose standard error exceeds this, are flagged kCornerFitPoor.
+  double max_position_se_px = 0.1;
   // Grid validation: the RMS of a homography fit from board to undistorted coordinates, in pixels
   // (scaled by fx), and the worst single corner.
   double max_homography_rms_px = 0.5, max_homography_worst_px = 1.5;
@@ -165,6 +172,8 @@ class CornerDetector {
   // The residual variance a fit of `fit` may have (see CornerSettings), DN^2; and its contrast bound.
   double residual_bound(const SaddleFit& fit, double radius, double misfit) const;
   bool fit_acceptable(const SaddleFit& fit, double radius) const;
+  // The standard error of a fitted corner's position (px) for the frame's noise.
+  double position_se(const SaddleFit& fit) const;
 
  private:
   bool track(const CornerResult& previous, CornerResult& out, bool band);
@@ -172,6 +181,10 @@ class CornerDetector {
   bool full_search(CornerResult& out);
   bool refine_all(CornerResult& out, bool from_previous);
   double fit_radius(double spacing) const;
+  // The blur test: within the window's reach, beyond it but the corner held to the noise (flagged
+  // poor), or refused.
+  enum class BlurVerdict : std::uint8_t { held, poor, refused };
+  BlurVerdict blur_verdict(const SaddleFit& fit, double radius) const;
   bool fit_corner(const SaddleInit& init, const EdgeDirections* edges, double radius, double tolerance_px,
                   SaddleFit& fit, std::uint8_t& flags);
   void grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols);

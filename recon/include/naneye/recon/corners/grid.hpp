@@ -20,8 +20,9 @@ bool coarse_grid_opencv(const LumaView& img, int rows, int cols, std::vector<uns
 int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col);
 // The same test at a point p with grid steps dc (to the next column) and dr (to the next row), raw
 // pixels: what the coarse lattice uses to tell X-junctions from the border squares' L- and
-// T-junctions before any fit.
+// T-junctions before any fit. Squares too small for samples at 0.35 of the diagonal (a far board)
+// are sampled at their centres when `square_centres` (the steps are the board's, not a false link's).
 int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& dc,
-                      const Eigen::Vector2d& dr);
+                      const Eigen::Vector2d& dr, bool square_centres = true);
 
 }  // namespace naneye::recon

@@ -45,6 +45,11 @@ struct SaddleFit {
   bool converged = false;
   bool undistorted = false;  // false: fitted in raw pixels (window beyond the model's fold)
   SaddleShading shading{};   // referred to px (fit_saddle_fast only)
+  // The corner's position variance per unit of pixel noise variance (px^2 / DN^2): the larger
+  // eigenvalue of the position block of (J' W J)^-1 at the solution (fit_saddle_fast only; 0: not
+  // computed). Times the noise variance, the position's variance as least squares gives it
+  // (Gauss-Markov): how well this window, this blur and this contrast hold the corner.
+  double position_var_per_noise = 0;
 };
 
 // A read-only float image with the rectangle [col 0, col_end) x [row_begin, row_end) usable.
