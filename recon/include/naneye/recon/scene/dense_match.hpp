@@ -42,7 +42,7 @@ struct MatcherSettings {
   int sgm_p1 = 2 * 9;
   int sgm_p2 = 8 * 9;
   int radius = 3;      // px; sub-pixel window (2 r + 1)^2
-  int iterations = 4;  // Gauss-Newton steps (each pixel converges in 2-3 from SGBM's start)
+  int iterations = 4;  // Gauss-Newton steps (each pixel converges in 2-3 from the SGM's start)
   // The integer stage is trusted to +-0.5 px: a match whose disparity sigma exceeds a third of
   // that could sit in the wrong basin undetected (3 sigma).
   double max_sigma_px = 0.5 / 3;
