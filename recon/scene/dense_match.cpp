@@ -7,19 +7,12 @@
 #include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
+#include "round.hpp"
 #include "select.hpp"
 #include "sgm.hpp"
 
 namespace naneye::recon::scene {
 namespace {
-
-// std::lround for |v| < 2^23 (half away from zero), without the library call: v minus its
-// truncation is exact in float.
-inline int round_half_away(float v) {
-  const int i = static_cast<int>(v);
-  const float f = v - static_cast<float>(i);
-  return i + (f >= 0.5f) - (f <= -0.5f);
-}
 
 SgmSettings sgm_settings(const MatcherSettings& s) {
   SgmSettings g;

@@ -3,10 +3,12 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 #include <array>
 #include <cmath>
 
 #include "lk_sample.hpp"
+#include "round.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -52,41 +54,57 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     }
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (ldlt.info() != Eigen::Success) return out;
+  // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
+  // float rounding of t) and sum_k t_k^2 (1 up to it).
+  Eigen::Matrix<double, 6, 1> sd_sum = Eigen::Matrix<double, 6, 1>::Zero(), sd_t = sd_sum;
+  double t_sum = 0, tt = 0;
+  for (int k = 0; k < n; ++k) {
+    sd_sum += sd[k];
+    sd_t.noalias() += sd[k] * double(t[k]);
+    t_sum += t[k];
+    tt += double(t[k]) * t[k];
+  }
   // The warp as a 3x3 matrix, template coordinates (relative to (u, v)) -> target raw pixels.
   Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
   if (!shape) M.topLeftCorner<2, 2>() = A0;
   M.topRightCorner<2, 1>() = start;
   std::array<float, kMaxN> wi{};
+  // The warped window wi, normalised to zero mean and unit norm (w = sc (wi - m)), enters only
+  // through e_k = w_k - t_k: b = sum_k sd_k e_k = sc (sum_k sd_k wi_k - m sd_sum) - sd_t and
+  // SSR = sum_k e_k^2 = sc^2 var - 2 sc (sum_k wi_k t_k - m t_sum) + tt, so one pass of nine dot
+  // products over the raw samples replaces normalising them and summing the residual (three passes).
+  // Double sums of float samples: var = sum wi^2 - m sum wi cancels ~(mean / contrast)^2 ~ 1e4 of
+  // 1e-16, far below the noise.
+  Eigen::Matrix<double, 6, 1> grad;  // b above
   double ssr = 0;
   auto sample = [&]() {
     const Eigen::Vector2d c = M.topRightCorner<2, 1>();
-    const int ci = static_cast<int>(std::lround(c.x())), ri = static_cast<int>(std::lround(c.y()));
+    const int ci = round_half_away(c.x()), ri = round_half_away(c.y());
     if (ci < 0 || ri < 0 || ci >= dst.width || ri >= dst.height || !dst_usable[ri * dst.width + ci])
       return false;
     lk_sample::Warp w;
     for (int r = 0; r < 2; ++r)
       for (int c = 0; c < 3; ++c) w.m[3 * r + c] = static_cast<float>(M(r, c));
     if (!lk_sample::sample_window(dst, w, qx.data(), qy.data(), n, wi.data())) return false;
-    double m = 0;
-    for (int k = 0; k < n; ++k) m += wi[k];
-    m /= n;
-    double var = 0;
-    for (int k = 0; k < n; ++k) var += (wi[k] - m) * (wi[k] - m);
+    double s1 = 0, s2 = 0, st = 0;
+    Eigen::Matrix<double, 6, 1> p = Eigen::Matrix<double, 6, 1>::Zero();
+    for (int k = 0; k < n; ++k) {
+      const double x = wi[k];
+      s1 += x;
+      s2 += x * x;
+      st += x * t[k];
+      p.noalias() += sd[k] * x;
+    }
+    const double m = s1 / n, var = s2 - s1 * m;
     if (!(var > 0)) return false;
     const double sc = 1.0 / std::sqrt(var);
-    for (int k = 0; k < n; ++k) wi[k] = static_cast<float>((wi[k] - m) * sc);
+    grad = sc * (p - m * sd_sum) - sd_t;
+    ssr = std::max(0.0, 1.0 - 2.0 * sc * (st - m * t_sum) + tt);
     return true;
   };
   for (int it = 0; it < s.max_iterations; ++it) {
     if (!sample()) return out;
-    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
-    ssr = 0;
-    for (int k = 0; k < n; ++k) {
-      const double e = wi[k] - t[k];
-      b.noalias() += sd[k] * e;
-      ssr += e * e;
-    }
-    const Eigen::Matrix<double, 6, 1> dp = ldlt.solve(b);
+    const Eigen::Matrix<double, 6, 1> dp = ldlt.solve(grad);
     Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
     D(0, 0) += dp(0);
     D(0, 1) = dp(1);
@@ -105,8 +123,6 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     }
   }
   if (!out.converged || !sample()) return LkResult{};
-  ssr = 0;
-  for (int k = 0; k < n; ++k) ssr += (wi[k] - t[k]) * (wi[k] - t[k]);
   out.px = M.topRightCorner<2, 1>();
   out.A = M.topLeftCorner<2, 2>();
   // Both windows have unit norm: ZNCC = 1 - SSR / 2.

@@ -8,6 +8,7 @@
 
 #include "naneye/base/enum_table.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
+#include "round.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -90,7 +91,7 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   rays_.assign(2 * np, 0.0);
   inv_norm_[0].assign(np, 0.f);
   inv_norm_[1].assign(np, 0.f);
-  integral_.assign(2 * static_cast<std::size_t>(luma_.width + 1) * (luma_.height + 1), 0.0);
+  norm_scratch_.assign(2 * static_cast<std::size_t>(luma_.width), 0.0);
   for (int r = 0; r < luma_.height; ++r)
     for (int c = 0; c < luma_.width; ++c) {
       const Undistorted u = rig_.left.undistort(Eigen::Vector2d(c, r));
@@ -122,9 +123,10 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   const GrayView L = luma.left_view();
   out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data());
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
-  window_inverse_norms(L, s_.search_radius, usable_search_[0].data(), inv_norm_[0].data(), integral_.data());
+  window_inverse_norms(L, s_.search_radius, usable_search_[0].data(), inv_norm_[0].data(),
+                       norm_scratch_.data());
   window_inverse_norms(luma.right_view(), s_.search_radius, usable_search_[1].data(), inv_norm_[1].data(),
-                       integral_.data());
+                       norm_scratch_.data());
   // Coarse to fine over the cell grid (SparseSettings::max_points): every 4th cell in both
   // directions, then every 2nd, then the three remaining quarter lattices, raster order within each.
   const int cell = s_.features.cell_px;
@@ -206,7 +208,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   // Left-right check: the right window, searched along its own curve in the left image, must come
   // back to the feature.
   const Undistorted ur = rig_.right.undistort(lk.px);
-  const int ru = static_cast<int>(std::lround(lk.px.x())), rv = static_cast<int>(std::lround(lk.px.y()));
+  const int ru = round_half_away(lk.px.x()), rv = round_half_away(lk.px.y());
   if (!ur.ok() || !usable_search_[1][static_cast<std::size_t>(rv) * R.width + ru]) {
     p.status = PointStatus::refinement_failed;
     return;

@@ -44,8 +44,8 @@ CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& 
                              const float* dst_inv_norm = nullptr);
 
 // Per pixel, 1 / sqrt(sum (I - mean)^2) over its (2 radius + 1)^2 window where `usable`, else 0.
-// `integral` holds 2 (w + 1) (h + 1) doubles (sums and sums of squares).
+// `scratch` holds 2 w doubles (column sums and sums of squares).
 void window_inverse_norms(const GrayView& img, int radius, const std::uint8_t* usable, float* out,
-                          double* integral);
+                          double* scratch);
 
 }  // namespace naneye::recon::scene

@@ -111,7 +111,7 @@ class SparseReconstructor {
   EpipolarCurve curve_, back_curve_;
   std::vector<double> rays_;            // left pixel centres' normalized rays (x, y)
   std::vector<float> inv_norm_[2];      // per pixel: 1 / |window - mean| of the coarse window
-  std::vector<double> integral_;        // scratch of window_inverse_norms
+  std::vector<double> norm_scratch_;    // scratch of window_inverse_norms
   std::vector<Eigen::Vector2d> shape_;  // the LK template's predicted places in the right image
 };
 
