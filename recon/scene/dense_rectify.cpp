@@ -7,6 +7,8 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "resample_kernels.hpp"
+
 namespace naneye::recon::scene {
 namespace {
 
@@ -33,16 +35,6 @@ bool taps_active(const cv::Mat& active, const Eigen::Vector2d& px) {
     for (int dc = -1; dc <= 2; ++dc)
       if (!active.at<std::uint8_t>(r + dr, c + dc)) return false;
   return true;
-}
-
-// Keys' cubic convolution weights (a = -0.5; Keys 1981, Eq. 15) at offset t in [0, 1) from tap 0,
-// for taps -1, 0, 1, 2.
-inline void keys_weights(float t, float w[4]) {
-  const float t2 = t * t, t3 = t2 * t;
-  w[0] = -0.5f * t3 + t2 - 0.5f * t;
-  w[1] = 1.5f * t3 - 2.5f * t2 + 1;
-  w[2] = -1.5f * t3 + 2 * t2 + 0.5f * t;
-  w[3] = 0.5f * t3 - 0.5f * t2;
 }
 
 }  // namespace
@@ -145,28 +137,11 @@ RectifiedRig build_rectified_rig(const StereoRig& rig, const cv::Mat& active_lef
 }
 
 void RectifiedRig::resample(int eye, const float* raw, int raw_width, cv::Mat& out) const {
-  const int* tp = tap[eye].data();
-  const float* fx = frac_x[eye].data();
-  const float* fy = frac_y[eye].data();
-  float* o = out.ptr<float>();
-  const std::size_t n = static_cast<std::size_t>(width) * height;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (tp[i] < 0) {
-      o[i] = 0.f;
-      continue;
-    }
-    // Keys' cubic, not bilinear: linear interpolation shifts a texture's phase with the
-    // fractional position (up to 0.045 px at a 4 px wavelength), a fixed disparity error per
-    // rectified pixel as large as the noise we aim at; the cubic's is about ten times smaller.
-    float wx[4], wy[4];
-    keys_weights(fx[i], wx);
-    keys_weights(fy[i], wy);
-    const float* p = raw + tp[i] - raw_width - 1;
-    float v = 0;
-    for (int r = 0; r < 4; ++r, p += raw_width)
-      v += wy[r] * (wx[0] * p[0] + wx[1] * p[1] + wx[2] * p[2] + wx[3] * p[3]);
-    o[i] = v;
-  }
+  // Keys' cubic, not bilinear: linear interpolation shifts a texture's phase with the fractional
+  // position (up to 0.045 px at a 4 px wavelength), a fixed disparity error per rectified pixel as
+  // large as the noise we aim at; the cubic's is about ten times smaller.
+  resample::taps(raw, raw_width, tap[eye].data(), frac_x[eye].data(), frac_y[eye].data(),
+                 static_cast<std::size_t>(width) * height, out.ptr<float>());
 }
 
 }  // namespace naneye::recon::scene

@@ -7,6 +7,7 @@
 
 #include "../corners/simd.hpp"
 #include "interpolate.hpp"
+#include "keys_simd.hpp"
 
 namespace naneye::recon::scene::lk_sample {
 namespace {
@@ -33,16 +34,6 @@ bool sample_plain(const GrayView& g, const Warp& w, const float* qx, const float
 template <class V>
 NANEYE_SIMD_INLINE void gather(const float* base, const VInt<V>& idx, V& v) {
   for (int l = 0; l < kLanes<V>; ++l) v[l] = base[idx[l]];
-}
-
-// keys_weights() per lane, the same expressions in the same order.
-template <class V>
-NANEYE_SIMD_INLINE void keys_v(V t, V w[4]) {
-  const V t2 = t * t, t3 = t2 * t;
-  w[0] = (V{} + -0.5f) * t3 + t2 - (V{} + 0.5f) * t;
-  w[1] = (V{} + 1.5f) * t3 - (V{} + 2.5f) * t2 + (V{} + 1.0f);
-  w[2] = (V{} + -1.5f) * t3 + (V{} + 2.0f) * t2 + (V{} + 0.5f) * t;
-  w[3] = (V{} + 0.5f) * t3 - (V{} + 0.5f) * t2;
 }
 
 template <class V>
@@ -85,20 +76,6 @@ NANEYE_SIMD_INLINE bool sample_v(const GrayView& g, const Warp& w, const float* 
 bool sample_sse(const GrayView& g, const Warp& w, const float* qx, const float* qy, int n, float* out) {
   return sample_v<simd::V4>(g, w, qx, qy, n, out);
 }
-// keys_weights() in AVX2, the same expressions in the same order.
-__attribute__((target("avx2"))) NANEYE_SIMD_INLINE void keys8(__m256 t, __m256* k) {
-  const __m256 t2 = _mm256_mul_ps(t, t), t3 = _mm256_mul_ps(t2, t);
-  k[0] = _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(-0.5f), t3), t2),
-                       _mm256_mul_ps(_mm256_set1_ps(0.5f), t));
-  k[1] = _mm256_add_ps(
-      _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(1.5f), t3), _mm256_mul_ps(_mm256_set1_ps(2.5f), t2)),
-      _mm256_set1_ps(1.0f));
-  k[2] = _mm256_add_ps(
-      _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(-1.5f), t3), _mm256_mul_ps(_mm256_set1_ps(2.0f), t2)),
-      _mm256_mul_ps(_mm256_set1_ps(0.5f), t));
-  k[3] = _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), t3), _mm256_mul_ps(_mm256_set1_ps(0.5f), t2));
-}
-
 // The same with AVX2's gather instruction, written out in intrinsics: 16 gathers per 8 points where
 // the lane-by-lane loads took 128 loads and inserts (callgrind: 83 instructions per point with
 // those). The same operations in the same order as sample_v.
