@@ -34,6 +34,7 @@ for f in usr/sbin/naneyed usr/bin/naneye etc/naneye/naneyed.toml \
   check "contains /$f" has "$f"
 done
 check "Depends lists the shared libraries (dpkg-shlibdeps)" grep -Eq '^ Depends:.*libopencv-core.*libsystemd' <<<"$info"
+check "Depends names imgcodecs (naneyed loads it at run time for images://)" grep -Eq '^ Depends:.*libopencv-imgcodecs[0-9]' <<<"$info"
 check "/etc/naneye/naneyed.toml is a conffile" grep -qx '/etc/naneye/naneyed.toml' \
   <(dpkg-deb --ctrl-tarfile "$deb" | tar -xOf - ./conffiles)
 check "postinst creates the naneye group" grep -q systemd-sysusers \

@@ -6,8 +6,10 @@
 #include <cstring>
 #include <fstream>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // the IMREAD_ flags only: the library is loaded on first use
 #include <opencv2/imgproc.hpp>
+
+#include "imdecode_lazy.hpp"
 
 namespace naneye::driver {
 namespace {
@@ -62,7 +64,7 @@ void decode_image(std::span<const std::uint8_t> bytes, const ImageSettings& opti
   try {
     // The file's own depth and channels: the 10-bit scaling and the mosaic check need them.
     const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U, const_cast<std::uint8_t*>(bytes.data()));
-    m = cv::imdecode(raw, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    m = imdecode_lazy(raw, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   } catch (const cv::Exception& e) {
     fail(origin, std::string("not a readable image (OpenCV: ") + e.err + ")");
   }
