@@ -17,6 +17,24 @@ Eigen::Vector2d curve_point(const CameraModel& cam, const Eigen::Vector3d& a, co
   if (const auto fold = cam.fold_radius_undistorted(); fold && xn.norm() >= *fold) inside = false;
   return cam.to_pixel(cam.distort(xn));
 }
+// The template's padded rows (`stride` floats each) times the image's rows from `row0`, summed in
+// four lanes, rows top to bottom, each row's vectors left to right. The default window (7 x 7,
+// stride 8) gets its own instance with the loops' bounds known (unrolled: match_along_curve 13.5 M ->
+// 8.9 M instructions, callgrind on the plane); both give the same bits.
+template <int Side = 0, int Stride = 0>
+simd::V4 padded_dot(const float* tp, const float* row0, int width, int side = Side, int stride = Stride) {
+  if constexpr (Side > 0) {
+    side = Side;
+    stride = Stride;
+  }
+  simd::V4 acc{};
+  for (int dr = 0; dr < side; ++dr) {
+    const float* row = row0 + dr * width;
+    for (int j = 0; j < stride; j += 4)
+      acc += simd::load<simd::V4>(tp + dr * stride + j) * simd::load<simd::V4>(row + j);
+  }
+  return acc;
+}
 }  // namespace
 
 void sample_epipolar_curve(const CameraModel& other, const Eigen::Matrix3d& R, const Eigen::Vector3d& T,
@@ -123,12 +141,9 @@ CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& 
       if (stride <= kMaxStride && c - radius + stride <= dst.width) {
         // The padded columns are read (times zero): they must lie inside the row. Float sums of
         // 49 products of <= 2^20 each: ~1e-7 relative, far below a score's noise.
-        V4 acc{};
-        for (int dr = 0; dr < side; ++dr) {
-          const float* row = dst.data + (r - radius + dr) * dst.width + c - radius;
-          for (int j = 0; j < stride; j += 4)
-            acc += simd::load<V4>(tp.data() + dr * stride + j) * simd::load<V4>(row + j);
-        }
+        const float* row0 = dst.data + (r - radius) * dst.width + c - radius;
+        const V4 acc = radius == 3 ? padded_dot<7, 8>(tp.data(), row0, dst.width)
+                                   : padded_dot(tp.data(), row0, dst.width, side, stride);
         sdot = (double(acc[0]) + acc[1]) + (double(acc[2]) + acc[3]);
       } else {
         // Float sums per row (7 products of <= 2^20 each: exact to ~1e-7 relative), double across rows.
