@@ -28,6 +28,13 @@ SgmSettings sgm_settings(const MatcherSettings& s) {
 }
 }  // namespace
 
+double effective_dof(double q, double median) {
+  if (!(q > 0) || !(median > q)) return std::numeric_limits<double>::infinity();
+  const double u = 1.0 - std::cbrt(q / median);                       // sqrt(c) / (1 - c)
+  const double r = (std::sqrt(1.0 + 4.0 * u * u) - 1.0) / (2.0 * u);  // sqrt(c)
+  return 2.0 / (9.0 * r * r);
+}
+
 RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings& s)
     : s_(s), w_(width), h_(height) {
   sgm_ = std::make_unique<Sgm>(w_, h_, sgm_settings(s_));
@@ -125,17 +132,26 @@ void RectifiedMatcher::level_medians(float min_n) {
   for (int b = 0; b < kBins; ++b) {
     const int cnt = start[b + 1] - start[b];
     bin_median_[b] = -1;
+    bin_nu_[b] = 0;
     if (cnt < kMinPerBin) continue;
     auto first = scratch_.begin() + start[b], mid = first + cnt / 2;
     std::nth_element(first, mid, first + cnt);
     bin_median_[b] = *mid;
+    auto low = first + static_cast<std::ptrdiff_t>(kResidualLowerQuantile * cnt);
+    std::nth_element(first, low, mid);
+    bin_nu_[b] = static_cast<float>(effective_dof(*low, *mid));
   }
   const int all = start[kBins];
   residual_sigma_ = 0;
   global_median_ = std::numeric_limits<double>::infinity();
+  global_nu_ = 0;
   if (all > 0) {
-    global_median_ = kth_smallest(scratch_.data(), static_cast<std::size_t>(all),
-                                  static_cast<std::size_t>(all / 2), select_hist_);
+    const auto n = static_cast<std::size_t>(all);
+    global_median_ = kth_smallest(scratch_.data(), n, n / 2, select_hist_);
+    global_nu_ =
+        effective_dof(kth_smallest(scratch_.data(), n, static_cast<std::size_t>(kResidualLowerQuantile * all),
+                                   select_hist_),
+                      global_median_);
     residual_sigma_ = std::sqrt(global_median_);
   }
 }
@@ -159,6 +175,10 @@ int RectifiedMatcher::bin_of(const float f[2]) const {
 double RectifiedMatcher::expected_residual(std::size_t i) const {
   const float m = bin_median_[bin_[i]];  // level_medians() binned every window validate() tests
   return m > 0 ? m : global_median_;
+}
+
+double RectifiedMatcher::expected_dof(std::size_t i) const {
+  return bin_median_[bin_[i]] > 0 ? bin_nu_[bin_[i]] : global_nu_;
 }
 
 void RectifiedMatcher::validate(const cv::Mat& valid_left) {
@@ -210,7 +230,8 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       }
       // Chi-square upper quantile over the window's effective degrees of freedom (Wilson-Hilferty
       // cube approximation; Johnson, Kotz, Balakrishnan 1994, Eq. 18.24).
-      const double nu = std::max(1.0, (n_[i] - 3.0) / std::max(1.0, static_cast<double>(kappa_px_[i])));
+      const double nu = std::max(
+          1.0, std::min((n_[i] - 3.0) / std::max(1.0, static_cast<double>(kappa_px_[i])), expected_dof(i)));
       const double t = 1 - 2 / (9 * nu) + zq * std::sqrt(2 / (9 * nu));
       if (s2_[i] > expected_residual(i) * t * t * t) {
         ++c.residual;

@@ -93,21 +93,21 @@ void expect_honest(const DenseFigures& f, const recon::scene::DepthMap& map, dou
 class DenseScene : public ::testing::TestWithParam<std::tuple<std::string, bool>> {};
 
 // The targets: coverage >= 80 % of the pixels both eyes see, <= 1 % bad-5 and rms(err/sigma)
-// within 0.7-1.4. Coverage and bad-5 are met on the mono plane, plane-far, sphere and height
-// renders; NOT yet where the texture is weak against the noise (the tube's dark far end) and on
-// Bayer pairs (~70 %: the residual test and the sigma bound refuse the mosaic's misfit). rms(err/
-// sigma) measures 1.19-1.28 where the targets are met, 1.16-1.41 on the others (the resampling's
-// misfit, 0.5-0.7 sigma, is not in the sigma: bench_dense_sigma). The cases that miss are held to
-// what the method gives today (coverage >= 50 %, bad-5 <= 2 %, rms(err/sigma) <= 1.5), not to the
-// target, so that a regression shows; docs/scene.md lists the gap.
+// within 0.7-1.4. Met on the mono plane, plane-far, sphere and height renders (93-95 %); Bayer
+// covers 78-85 % on those since the residual test reads its spread off the pair (effective_dof:
+// was ~71 %), held to 75 %; NOT yet where the texture is weak against the noise (the tube's dark
+// far end: 70 % mono, 54 % Bayer). rms(err/sigma) measures 1.18-1.29 where the targets are met,
+// 1.32-1.42 on the tube (the resampling's misfit, 0.5-0.7 sigma, is not in the sigma:
+// bench_dense_sigma). The tube is held to what the method gives today (coverage >= 50 %, bad-5 <= 2
+// %, rms(err/sigma) <= 1.5), not to the target, so that a regression shows; docs/scene.md lists the gap.
 TEST_P(DenseScene, AgainstTruth) {
   const auto& [name, bayer] = GetParam();
   const auto& p = test::textured_pair(name, bayer);
   recon::scene::DepthMap map;
   const DenseFigures f = run(p, bayer, map, name.c_str());
-  const bool target = !bayer && name != "tube";
+  const bool target = name != "tube";
   const double coverage = static_cast<double>(f.covered) / std::max(1, f.truth_visible);
-  EXPECT_GE(coverage, target ? 0.80 : 0.50);
+  EXPECT_GE(coverage, !target ? 0.50 : bayer ? 0.75 : 0.80);
   expect_honest(f, map, target ? 1.4 : 1.5, target ? 0.01 : 0.02);
   // Depth error: a mean disparity error within 3x the sparse path's measured 0.024 px rms (0.07
   // px); the tube (grazing walls, a dark far end), 0.12 px: measured 0.10.
@@ -141,7 +141,7 @@ TEST_P(DenseImaging, HonestOnTheSphere) {
   // Dim or blurred and noisy: 1.52-1.54 measured (the noise spread itself is 1.22 sigma at low
   // signal to noise, bench_dense_sigma).
   expect_honest(f, map, 1.65, 0.01);
-  EXPECT_GE(static_cast<double>(f.covered) / std::max(1, f.truth_visible), c.bayer ? 0.5 : 0.8);
+  EXPECT_GE(static_cast<double>(f.covered) / std::max(1, f.truth_visible), c.bayer ? 0.75 : 0.8);
 }
 
 INSTANTIATE_TEST_SUITE_P(Conditions, DenseImaging,

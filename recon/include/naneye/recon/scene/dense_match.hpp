@@ -78,6 +78,18 @@ struct MatchCounts {
   int valid = 0;
 };
 
+// The residual test's null: a window's residual variance over the median of its kind is chi-square
+// over nu (nu = (N - 3) / kappa for the pair's noise). A Bayer pair's demosaicing misfit, which
+// varies with the texture's phase against the mosaic from window to window, widens that spread
+// beyond the noise's (measured 2026-12-04: at p = 1e-3 the test refused 10-12 % of a Bayer
+// render's windows, 1-2 % of a mono one's, and the refused windows' depths were no worse). So the
+// spread is also read off the pair: its 15.87 % quantile (one sigma below the median) against the
+// median, where wrong matches and occlusions, which only raise a residual, do not reach. Under
+// Wilson-Hilferty (Johnson, Kotz, Balakrishnan 1994, Eq. 18.24) (q / m)^(1/3) = 1 - sqrt(c) / (1 - c)
+// with c = 2 / (9 nu); solved for c, nu = 2 / (9 c). Infinity when q >= m or q <= 0 (no spread).
+inline constexpr double kResidualLowerQuantile = 0.1587;
+double effective_dof(double q, double median);
+
 class RectifiedMatcher {
  public:
   RectifiedMatcher(int width, int height, const MatcherSettings& s = {});
@@ -108,6 +120,7 @@ class RectifiedMatcher {
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
   int bin_of(const float f[2]) const;
+  double expected_dof(std::size_t i) const;
   double expected_residual(std::size_t i) const;
 
   // Residual variance per kind of window, 8 x 8 bins of (mean level, log contrast): shot noise is
@@ -118,10 +131,14 @@ class RectifiedMatcher {
   static constexpr int kBins = kBinsPerAxis * kBinsPerAxis;
   static constexpr int kMinPerBin = 20;
   std::array<float, kBins> bin_median_{};
+  // The degrees of freedom the bin's residuals show (effective_dof: from the spread of the lower
+  // half, which wrong matches do not reach); the residual test uses no more than these.
+  std::array<float, kBins> bin_nu_{};
   std::vector<float> features_;    // per window: mean level, log contrast (window_features)
   std::vector<std::uint8_t> bin_;  // per window: its bin
   float bin_lo_[2] = {0, 0}, bin_step_[2] = {1, 1};
   double global_median_ = 0;
+  double global_nu_ = 0;
 
   MatcherSettings s_;
   int w_, h_;
