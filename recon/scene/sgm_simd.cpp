@@ -1,6 +1,9 @@
-// See sgm_simd.hpp. The scalar functions are the reference the vector ones are tested against; the
-// vector templates are inlined only into their entry points, each compiled for its own target.
+// See sgm_simd.hpp: the vector builds and the run-time choice. The scalar reference they are tested
+// against is in sgm_scalar.cpp; the vector templates are inlined only into their entry points, each
+// compiled for its own target.
 #include "sgm_simd.hpp"
+
+#include "sgm_scalar.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -51,120 +54,9 @@ NANEYE_SGM_INLINE T vmin(T a, T b) {
   return a < b ? a : b;
 }
 
-// ---- scalar reference ----------------------------------------------------------------------
-
-constexpr int kCensusR = 2;  // px; the 5 x 5 census window's radius
-
-std::uint32_t census_at(const float* img, std::size_t stride, int x, int y) {
-  const float* c = img + static_cast<std::size_t>(y) * stride + x;
-  std::uint32_t bits = 0, bit = 1;
-  for (int dy = -kCensusR; dy <= kCensusR; ++dy)
-    for (int dx = -kCensusR; dx <= kCensusR; ++dx) {
-      if (dy == 0 && dx == 0) continue;
-      if (c[dy * static_cast<std::ptrdiff_t>(stride) + dx] > *c) bits |= bit;
-      bit <<= 1;
-    }
-  return bits;
-}
-
-void census_scalar(const float* img, std::size_t stride, int w, int h, int y, int x0, int x1,
-                   std::uint32_t* out) {
-  const bool row_in = y >= kCensusR && y < h - kCensusR;
-  for (int x = x0; x < x1; ++x)
-    out[x] = row_in && x >= kCensusR && x < w - kCensusR ? census_at(img, stride, x, y) : 0u;
-}
-
-void hamming_scalar(const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D, int x0,
-                    int x1, std::int16_t* H) {
-  for (int x = x0; x < x1; ++x)
-    for (int d = 0; d < D; ++d)
-      H[static_cast<std::size_t>(x) * D + d] =
-          static_cast<std::int16_t>(__builtin_popcount(cl[x] ^ cr_rev[w - 1 - x + dmin + d]));
-}
-
-void hsum3_scalar(const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out) {
-  for (int x = x0; x < x1; ++x) {
-    const std::int16_t* a = H + static_cast<std::size_t>(std::max(h0, x - 1)) * D;
-    const std::int16_t* b = H + static_cast<std::size_t>(x) * D;
-    const std::int16_t* c = H + static_cast<std::size_t>(std::min(h1 - 1, x + 1)) * D;
-    for (int d = 0; d < D; ++d)
-      out[static_cast<std::size_t>(x) * D + d] = static_cast<std::int16_t>(a[d] + b[d] + c[d]);
-  }
-}
-
-void add3_scalar(const std::int16_t* a, const std::int16_t* b, const std::int16_t* c, int D, int x0, int x1,
-                 std::int16_t* out) {
-  for (std::size_t i = static_cast<std::size_t>(x0) * D; i < static_cast<std::size_t>(x1) * D; ++i)
-    out[i] = static_cast<std::int16_t>(a[i] + b[i] + c[i]);
-}
-
-// Hirschmueller 2008, Eq. 13: L_r(p, d) = C(p, d) + min(L_r(p - r, d), L_r(p - r, d - 1) + P1,
-// L_r(p - r, d + 1) + P1, min_i L_r(p - r, i) + P2) - min_k L_r(p - r, k). `prev` is the
-// predecessor's padded block, `out` this pixel's; returns min_d of the new values.
-int path_scalar(const std::int16_t* prev, int prev_min, const std::int16_t* c, std::int16_t* out, int D,
-                int p1, int p2) {
-  int m = kPad;
-  for (int d = 0; d < D; ++d) {
-    const int best = std::min({static_cast<int>(prev[1 + d]), prev[d] + p1, prev[2 + d] + p1, prev_min + p2});
-    const int v = c[d] + best - prev_min;
-    out[1 + d] = static_cast<std::int16_t>(v);
-    m = std::min(m, v);
-  }
-  return m;
-}
-
-// The row's pixel x's predecessor along a path from the row above at column xp, or the start block.
-struct Pred {
-  const std::int16_t* block;
-  int min;
-};
-NANEYE_SGM_INLINE Pred above(const PathRow& r, int k, int xp) {
-  const int Ds = r.D + 2;
-  if (xp < r.prev_lo || xp >= r.prev_hi) return {r.start, 0};
-  return {r.prev[k] + static_cast<std::size_t>(xp) * Ds, r.prev_min[k][xp]};
-}
-
-void aggregate_scalar(const PathRow& r) {
-  const int D = r.D, Ds = D + 2;
-  int h_min = 0;
-  for (int x = r.lo; x < r.hi; ++x) {
-    const std::int16_t* c = r.cost + static_cast<std::size_t>(x) * D;
-    std::int16_t* s = r.sum + static_cast<std::size_t>(x) * D;
-    const Pred h = x > r.lo ? Pred{r.horiz[(x - 1) & 1], h_min} : Pred{r.start, 0};
-    h_min = path_scalar(h.block, h.min, c, r.horiz[x & 1], D, r.p1, r.p2);
-    for (int d = 0; d < D; ++d) s[d] = r.horiz[x & 1][1 + d];
-    for (int k = 0; k < 3; ++k) {
-      const Pred p = above(r, k, x - 1 + k);  // top-left, top, top-right
-      std::int16_t* o = r.cur[k] + static_cast<std::size_t>(x) * Ds;
-      r.cur_min[k][x] = static_cast<std::int16_t>(path_scalar(p.block, p.min, c, o, D, r.p1, r.p2));
-      for (int d = 0; d < D; ++d) s[d] = static_cast<std::int16_t>(s[d] + o[1 + d]);
-    }
-  }
-  for (int x = r.hi - 1; x >= r.lo; --x) {
-    const std::int16_t* c = r.cost + static_cast<std::size_t>(x) * D;
-    std::int16_t* s = r.sum + static_cast<std::size_t>(x) * D;
-    const Pred h = x < r.hi - 1 ? Pred{r.horiz_back[(x + 1) & 1], h_min} : Pred{r.start, 0};
-    h_min = path_scalar(h.block, h.min, c, r.horiz_back[x & 1], D, r.p1, r.p2);
-    for (int d = 0; d < D; ++d) s[d] = static_cast<std::int16_t>(s[d] + r.horiz_back[x & 1][1 + d]);
-  }
-}
-
-void wta_scalar(const std::int16_t* sum, int D, int dmin, int w, int lo, int hi, std::int16_t* best,
-                std::int16_t* rcost_rev, std::int16_t* rdisp_rev) {
-  for (int x = lo; x < hi; ++x) {
-    const std::int16_t* s = sum + static_cast<std::size_t>(x) * D;
-    int b = 0;
-    for (int d = 1; d < D; ++d)
-      if (s[d] < s[b]) b = d;
-    best[x] = static_cast<std::int16_t>(b);
-    const std::size_t j = static_cast<std::size_t>(w - 1 - x + dmin);  // right pixel x - dmin - d at j + d
-    for (int d = 0; d < D; ++d)
-      if (s[d] < rcost_rev[j + d]) {
-        rcost_rev[j + d] = s[d];
-        rdisp_rev[j + d] = static_cast<std::int16_t>(dmin + d);
-      }
-  }
-}
+using scalar::above;
+using scalar::kCensusR;
+using scalar::Pred;
 
 // ---- vector builds -------------------------------------------------------------------------
 
@@ -180,7 +72,7 @@ NANEYE_SGM_INLINE void census_v(const float* img, std::size_t stride, int w, int
   }
   const int in0 = std::clamp(x0, kCensusR, std::max(kCensusR, w - kCensusR));
   const int in1 = std::clamp(x1, in0, std::max(in0, w - kCensusR));
-  census_scalar(img, stride, w, h, y, x0, in0, out);  // border columns: scalar (zero)
+  scalar::census(img, stride, w, h, y, x0, in0, out);  // border columns: scalar (zero)
   const float* row = img + static_cast<std::size_t>(y) * stride;
   int x = in0;
   for (; x + L <= in1; x += L) {
@@ -195,7 +87,7 @@ NANEYE_SGM_INLINE void census_v(const float* img, std::size_t stride, int w, int
       }
     store(out + x, bits);
   }
-  census_scalar(img, stride, w, h, y, x, x1, out);  // the tail and the right border
+  scalar::census(img, stride, w, h, y, x, x1, out);  // the tail and the right border
 }
 
 template <int B>
@@ -262,7 +154,7 @@ NANEYE_SGM_INLINE int hmin(typename Vec<B>::H v) {
   return v[0];
 }
 
-// Eq. 13 (path_scalar) on L disparities from d; jump = min_k L_r(p - r, k) + P2 is formed here
+// Eq. 13 (sgm_scalar.cpp's path) on L disparities from d; jump = min_k L_r(p - r, k) + P2 is formed here
 // rather than kept per path (four fewer live registers in the forward loop).
 template <int B>
 NANEYE_SGM_INLINE typename Vec<B>::H path_v(const std::int16_t* prev, int d, typename Vec<B>::H prev_min,
@@ -414,34 +306,34 @@ void census_row(Isa isa, const float* img, std::size_t stride, int w, int h, int
                 std::uint32_t* out) {
   (isa == Isa::avx2   ? census_avx2
    : isa == Isa::sse2 ? census_sse
-                      : census_scalar)(img, stride, w, h, y, x0, x1, out);
+                      : scalar::census)(img, stride, w, h, y, x0, x1, out);
 }
 
 void hamming_row(Isa isa, const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D,
                  int x0, int x1, std::int16_t* H) {
   (isa == Isa::avx2   ? hamming_avx2
    : isa == Isa::sse2 ? hamming_sse
-                      : hamming_scalar)(cl, cr_rev, w, dmin, D, x0, x1, H);
+                      : scalar::hamming)(cl, cr_rev, w, dmin, D, x0, x1, H);
 }
 
 void hsum3_row(Isa isa, const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out) {
-  (isa == Isa::avx2 ? hsum3_avx2 : isa == Isa::sse2 ? hsum3_sse : hsum3_scalar)(H, D, h0, h1, x0, x1, out);
+  (isa == Isa::avx2 ? hsum3_avx2 : isa == Isa::sse2 ? hsum3_sse : scalar::hsum3)(H, D, h0, h1, x0, x1, out);
 }
 
 void add3_row(Isa isa, const std::int16_t* a, const std::int16_t* b, const std::int16_t* c, int D, int x0,
               int x1, std::int16_t* out) {
-  (isa == Isa::avx2 ? add3_avx2 : isa == Isa::sse2 ? add3_sse : add3_scalar)(a, b, c, D, x0, x1, out);
+  (isa == Isa::avx2 ? add3_avx2 : isa == Isa::sse2 ? add3_sse : scalar::add3)(a, b, c, D, x0, x1, out);
 }
 
 void aggregate_row(Isa isa, const PathRow& r) {
-  (isa == Isa::avx2 ? aggregate_avx2 : isa == Isa::sse2 ? aggregate_sse : aggregate_scalar)(r);
+  (isa == Isa::avx2 ? aggregate_avx2 : isa == Isa::sse2 ? aggregate_sse : scalar::aggregate)(r);
 }
 
 void wta_row(Isa isa, const std::int16_t* sum, int D, int dmin, int w, int lo, int hi, std::int16_t* best,
              std::int16_t* rcost_rev, std::int16_t* rdisp_rev) {
   (isa == Isa::avx2   ? wta_avx2
    : isa == Isa::sse2 ? wta_sse
-                      : wta_scalar)(sum, D, dmin, w, lo, hi, best, rcost_rev, rdisp_rev);
+                      : scalar::wta)(sum, D, dmin, w, lo, hi, best, rcost_rev, rdisp_rev);
 }
 
 }  // namespace naneye::recon::scene::sgm_simd
