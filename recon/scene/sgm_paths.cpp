@@ -19,9 +19,9 @@ using scalar::Pred;
 // - min_k L_r(p - r, k); jump = prev_min + P2 is formed here rather than kept per path (four fewer
 // live registers in the forward loop).
 template <int B>
-NANEYE_SGM_INLINE typename Vec<B>::H path_v(const std::int16_t* prev, int d, typename Vec<B>::H prev_min,
-                                            typename Vec<B>::H p1, typename Vec<B>::H p2,
-                                            typename Vec<B>::H c) {
+NANEYE_SGM_INLINE typename Vec<B>::H path_v(const std::int16_t* prev, int d,
+                                            const typename Vec<B>::H& prev_min, const typename Vec<B>::H& p1,
+                                            const typename Vec<B>::H& p2, const typename Vec<B>::H& c) {
   using V = typename Vec<B>::H;
   const V a = load<V>(prev + 1 + d), lo = load<V>(prev + d) + p1, hi = load<V>(prev + 2 + d) + p1;
   return vmin(vmin(a, lo), vmin(hi, prev_min + p2)) + c - prev_min;
@@ -32,10 +32,11 @@ NANEYE_SGM_INLINE typename Vec<B>::H path_v(const std::int16_t* prev, int d, typ
 // Its neighbours at d -+ 1 are lane shifts (vperm2i128 + vpalignr with AVX2) rather than loads
 // straddling the stores of the pixel just done, which the store buffer cannot forward.
 template <int B>
-NANEYE_SGM_INLINE typename Vec<B>::H path_reg(typename Vec<B>::H below, typename Vec<B>::H a,
-                                              typename Vec<B>::H above, typename Vec<B>::H prev_min,
-                                              typename Vec<B>::H p1, typename Vec<B>::H p2,
-                                              typename Vec<B>::H c) {
+NANEYE_SGM_INLINE typename Vec<B>::H path_reg(const typename Vec<B>::H& below, const typename Vec<B>::H& a,
+                                              const typename Vec<B>::H& above,
+                                              const typename Vec<B>::H& prev_min,
+                                              const typename Vec<B>::H& p1, const typename Vec<B>::H& p2,
+                                              const typename Vec<B>::H& c) {
   using V = typename Vec<B>::H;
   V lo, hi;
   if constexpr (B == 32) {
@@ -46,6 +47,12 @@ NANEYE_SGM_INLINE typename Vec<B>::H path_reg(typename Vec<B>::H below, typename
     hi = __builtin_shuffle(a, above, V{1, 2, 3, 4, 5, 6, 7, 8});
   }
   return vmin(vmin(a, lo + p1), vmin(hi + p1, prev_min + p2)) + c - prev_min;
+}
+
+// The predecessor's block k + 1, kPad beyond the band (the index stays in bounds for any k < N).
+template <int N, class V>
+NANEYE_SGM_INLINE V next(const V (&h)[N], int k, const V& pad) {
+  return k + 1 < N ? h[k + 1 < N ? k + 1 : k] : pad;
 }
 
 // A band of N vectors (D = N L, known when compiled): both horizontal paths' predecessors stay in
@@ -75,7 +82,7 @@ NANEYE_SGM_INLINE void aggregate_fixed(const PathRow& r) {
     for (int k = 0; k < N; ++k) {
       const int d = k * L;
       const V cv = load<V>(c + d);
-      const V v0 = path_reg<B>(below, h[k], k + 1 < N ? h[k + 1 < N ? k + 1 : k] : pad, pm0, p1, p2, cv);
+      const V v0 = path_reg<B>(below, h[k], next(h, k, pad), pm0, p1, p2, cv);
       const V v1 = path_v<B>(q1.block, d, pm1, p1, p2, cv);
       const V v2 = path_v<B>(q2.block, d, pm2, p1, p2, cv);
       const V v3 = path_v<B>(q3.block, d, pm3, p1, p2, cv);
@@ -105,8 +112,7 @@ NANEYE_SGM_INLINE void aggregate_fixed(const PathRow& r) {
 #pragma GCC unroll 16
     for (int k = 0; k < N; ++k) {
       const int d = k * L;
-      const V v =
-          path_reg<B>(below, h[k], k + 1 < N ? h[k + 1 < N ? k + 1 : k] : pad, pm, p1, p2, load<V>(c + d));
+      const V v = path_reg<B>(below, h[k], next(h, k, pad), pm, p1, p2, load<V>(c + d));
       below = h[k];
       h[k] = v;
       m = vmin(m, v);

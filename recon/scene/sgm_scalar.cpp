@@ -41,12 +41,14 @@ void census(const float* img, std::size_t stride, int w, int h, int y, int x0, i
     out[x] = row_in && x >= kCensusR && x < w - kCensusR ? census_at(img, stride, x, y) : 0u;
 }
 
-void hamming(const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D, int x0, int x1,
-             std::int16_t* H) {
+void hamming(const std::uint32_t* cl, const std::uint16_t* lo_rev, const std::uint16_t* hi_rev, int w,
+             int dmin, int D, int x0, int x1, std::int16_t* H) {
   for (int x = x0; x < x1; ++x)
-    for (int d = 0; d < D; ++d)
-      H[static_cast<std::size_t>(x) * D + d] =
-          static_cast<std::int16_t>(__builtin_popcount(cl[x] ^ cr_rev[w - 1 - x + dmin + d]));
+    for (int d = 0; d < D; ++d) {
+      const std::size_t j = static_cast<std::size_t>(w - 1 - x + dmin + d);
+      const std::uint32_t cr = lo_rev[j] | static_cast<std::uint32_t>(hi_rev[j]) << 16;
+      H[static_cast<std::size_t>(x) * D + d] = static_cast<std::int16_t>(__builtin_popcount(cl[x] ^ cr));
+    }
 }
 
 void hsum3(const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out) {

@@ -12,8 +12,8 @@ namespace naneye::recon::scene::sgm_simd::scalar {
 inline constexpr int kCensusR = 2;  // px; the 5 x 5 census window's radius
 
 void census(const float* img, std::size_t stride, int w, int h, int y, int x0, int x1, std::uint32_t* out);
-void hamming(const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D, int x0, int x1,
-             std::int16_t* H);
+void hamming(const std::uint32_t* cl, const std::uint16_t* lo_rev, const std::uint16_t* hi_rev, int w,
+             int dmin, int D, int x0, int x1, std::int16_t* H);
 void hsum3(const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out);
 void add3(const std::int16_t* a, const std::int16_t* b, const std::int16_t* c, int D, int x0, int x1,
           std::int16_t* out);

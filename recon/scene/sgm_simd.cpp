@@ -51,24 +51,27 @@ NANEYE_SGM_INLINE void census_v(const float* img, std::size_t stride, int w, int
 }
 
 template <int B>
-NANEYE_SGM_INLINE void hamming_v(const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D,
-                                 int x0, int x1, std::int16_t* H) {
-  using U = typename Vec<B>::U;
-  using HalfH = typename Vec<B>::HalfH;
-  constexpr int L = Vec<B>::k32;
+NANEYE_SGM_INLINE void hamming_v(const std::uint32_t* cl, const std::uint16_t* lo_rev,
+                                 const std::uint16_t* hi_rev, int w, int dmin, int D, int x0, int x1,
+                                 std::int16_t* H) {
+  using UH = typename Vec<B>::UH;
+  using V = typename Vec<B>::H;
+  constexpr int L = Vec<B>::k16;
   for (int x = x0; x < x1; ++x) {
-    const U l = U{} + cl[x];
-    const std::uint32_t* r = cr_rev + (w - 1 - x + dmin);
+    const UH llo = UH{} + static_cast<std::uint16_t>(cl[x] & 0xffffu);
+    const UH lhi = UH{} + static_cast<std::uint16_t>(cl[x] >> 16);
+    const std::size_t j = static_cast<std::size_t>(w - 1 - x + dmin);
     std::int16_t* o = H + static_cast<std::size_t>(x) * D;
     for (int d = 0; d < D; d += L) {  // D is a multiple of 16 (Sgm's constructor)
-      // Population count by halving sums (no multiply: SSE2 has no 32-bit lane product).
-      U v = l ^ load<U>(r + d);
-      v = v - ((v >> 1) & 0x55555555u);
-      v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
-      v = (v + (v >> 4)) & 0x0f0f0f0fu;
-      v = v + (v >> 8);
-      v = (v + (v >> 16)) & 0x3fu;
-      store(o + d, __builtin_convertvector(v, HalfH));
+      // Population count by halving sums (no multiply: SSE2 has no lane product that would help),
+      // the low 16 bits and the high 8 side by side until their byte counts (each <= 8) are added.
+      UH a = llo ^ load<UH>(lo_rev + j + d), b = lhi ^ load<UH>(hi_rev + j + d);
+      a = a - ((a >> 1) & 0x5555);
+      b = b - ((b >> 1) & 0x55);
+      a = (a & 0x3333) + ((a >> 2) & 0x3333);
+      b = (b & 0x33) + ((b >> 2) & 0x33);
+      a = ((a + (a >> 4)) & 0x0f0f) + ((b + (b >> 4)) & 0x0f);   // bytes: <= 16 low, <= 8 high
+      store(o + d, reinterpret_cast<V>((a + (a >> 8)) & 0x1f));  // <= 24 census bits
     }
   }
 }
@@ -133,13 +136,14 @@ __attribute__((target("avx2"))) void census_avx2(const float* img, std::size_t s
                                                  int x0, int x1, std::uint32_t* out) {
   census_v<32>(img, stride, w, h, y, x0, x1, out);
 }
-void hamming_sse(const std::uint32_t* cl, const std::uint32_t* cr, int w, int dmin, int D, int x0, int x1,
-                 std::int16_t* H) {
-  hamming_v<16>(cl, cr, w, dmin, D, x0, x1, H);
+void hamming_sse(const std::uint32_t* cl, const std::uint16_t* lo, const std::uint16_t* hi, int w, int dmin,
+                 int D, int x0, int x1, std::int16_t* H) {
+  hamming_v<16>(cl, lo, hi, w, dmin, D, x0, x1, H);
 }
-__attribute__((target("avx2"))) void hamming_avx2(const std::uint32_t* cl, const std::uint32_t* cr, int w,
-                                                  int dmin, int D, int x0, int x1, std::int16_t* H) {
-  hamming_v<32>(cl, cr, w, dmin, D, x0, x1, H);
+__attribute__((target("avx2"))) void hamming_avx2(const std::uint32_t* cl, const std::uint16_t* lo,
+                                                  const std::uint16_t* hi, int w, int dmin, int D, int x0,
+                                                  int x1, std::int16_t* H) {
+  hamming_v<32>(cl, lo, hi, w, dmin, D, x0, x1, H);
 }
 void hsum3_sse(const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out) {
   hsum3_v<16>(H, D, h0, h1, x0, x1, out);
@@ -178,11 +182,11 @@ void census_row(Isa isa, const float* img, std::size_t stride, int w, int h, int
                       : scalar::census)(img, stride, w, h, y, x0, x1, out);
 }
 
-void hamming_row(Isa isa, const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D,
-                 int x0, int x1, std::int16_t* H) {
+void hamming_row(Isa isa, const std::uint32_t* cl, const std::uint16_t* lo_rev, const std::uint16_t* hi_rev,
+                 int w, int dmin, int D, int x0, int x1, std::int16_t* H) {
   (isa == Isa::avx2   ? hamming_avx2
    : isa == Isa::sse2 ? hamming_sse
-                      : scalar::hamming)(cl, cr_rev, w, dmin, D, x0, x1, H);
+                      : scalar::hamming)(cl, lo_rev, hi_rev, w, dmin, D, x0, x1, H);
 }
 
 void hsum3_row(Isa isa, const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out) {

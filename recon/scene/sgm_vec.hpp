@@ -14,7 +14,7 @@
 
 namespace naneye::recon::scene::sgm_simd::vec {
 
-// One vector width's types: floats and 32-bit lanes (census, Hamming), and 16-bit lanes (costs).
+// One vector width's types: floats and 32-bit lanes (census), and 16-bit lanes (Hamming, costs).
 // (GCC takes vector_size only with a constant, not a template parameter: one specialisation each.)
 template <int Bytes>
 struct Vec;
@@ -23,6 +23,7 @@ struct Vec<16> {
   using F = float __attribute__((vector_size(16)));
   using U = std::uint32_t __attribute__((vector_size(16)));
   using H = std::int16_t __attribute__((vector_size(16)));
+  using UH = std::uint16_t __attribute__((vector_size(16)));
   using HalfH = std::int16_t __attribute__((vector_size(8)));  // U's lanes narrowed
   static constexpr int k32 = 4, k16 = 8;
 };
@@ -31,6 +32,7 @@ struct Vec<32> {
   using F = float __attribute__((vector_size(32)));
   using U = std::uint32_t __attribute__((vector_size(32)));
   using H = std::int16_t __attribute__((vector_size(32)));
+  using UH = std::uint16_t __attribute__((vector_size(32)));
   using HalfH = std::int16_t __attribute__((vector_size(16)));
   static constexpr int k32 = 8, k16 = 16;
 };
@@ -42,18 +44,19 @@ NANEYE_SGM_INLINE T load(const P* p) {
   return v;
 }
 template <class T, class P>
-NANEYE_SGM_INLINE void store(P* p, T v) {
+NANEYE_SGM_INLINE void store(P* p, const T& v) {
   std::memcpy(p, &v, sizeof v);
 }
 template <class T>
-NANEYE_SGM_INLINE T vmin(T a, T b) {
+NANEYE_SGM_INLINE T vmin(const T& a, const T& b) {
   return a < b ? a : b;
 }
 
 // The smallest lane, by halving: each step takes the lane-wise minimum with the other half.
 template <int B>
-NANEYE_SGM_INLINE int hmin(typename Vec<B>::H v) {
+NANEYE_SGM_INLINE int hmin(const typename Vec<B>::H& in) {
   using V = typename Vec<B>::H;
+  V v = in;
   if constexpr (B == 32) {
     v = vmin(v, __builtin_shuffle(v, V{8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7}));
     v = vmin(v, __builtin_shuffle(v, V{4, 5, 6, 7, 0, 1, 2, 3, 12, 13, 14, 15, 8, 9, 10, 11}));
@@ -71,8 +74,8 @@ NANEYE_SGM_INLINE int hmin(typename Vec<B>::H v) {
 // vectors' halves packed side by side, so the four reductions share their shuffles and minima
 // (8 steps of shuffle + minimum at 16 lanes instead of 16; min is exact, the same bits).
 template <int B>
-NANEYE_SGM_INLINE void hmin4(typename Vec<B>::H a, typename Vec<B>::H b, typename Vec<B>::H c,
-                             typename Vec<B>::H d, int out[4]) {
+NANEYE_SGM_INLINE void hmin4(const typename Vec<B>::H& a, const typename Vec<B>::H& b,
+                             const typename Vec<B>::H& c, const typename Vec<B>::H& d, int out[4]) {
   using V = typename Vec<B>::H;
   if constexpr (B == 32) {
     // 128-bit halves: [a | b] and [c | d], each 8 lanes (vperm2i128).
