@@ -24,7 +24,8 @@ Sgm::Sgm(int width, int height, const SgmSettings& s)
   hi_.assign(static_cast<std::size_t>(h_), 0);
   cl_.assign(w, 0);
   cr_.assign(w, 0);
-  crev_.assign(w, 0);
+  crev_lo_.assign(w, 0);
+  crev_hi_.assign(w, 0);
   ham_.assign(w * D, 0);
   ring_.assign(3 * w * D, 0);
   cost_.assign(w * D, 0);
@@ -58,9 +59,13 @@ void Sgm::cost_row(const cv::Mat& left, const cv::Mat& right, int k) {
   const int r0 = h0 - dmin - D_ + 1, r1 = h1 - dmin;  // the right columns they reach, >= 0
   sgm_simd::census_row(isa_, left.ptr<float>(), left.step1(), w_, h_, k, h0, h1, cl_.data());
   sgm_simd::census_row(isa_, right.ptr<float>(), right.step1(), w_, h_, k, r0, r1, cr_.data());
-  for (int j = r0; j < r1; ++j)
-    crev_[static_cast<std::size_t>(w_ - 1 - j)] = cr_[static_cast<std::size_t>(j)];
-  sgm_simd::hamming_row(isa_, cl_.data(), crev_.data(), w_, dmin, D_, h0, h1, ham_.data());
+  for (int j = r0; j < r1; ++j) {
+    const std::uint32_t c = cr_[static_cast<std::size_t>(j)];
+    crev_lo_[static_cast<std::size_t>(w_ - 1 - j)] = static_cast<std::uint16_t>(c & 0xffffu);
+    crev_hi_[static_cast<std::size_t>(w_ - 1 - j)] = static_cast<std::uint16_t>(c >> 16);
+  }
+  sgm_simd::hamming_row(isa_, cl_.data(), crev_lo_.data(), crev_hi_.data(), w_, dmin, D_, h0, h1,
+                        ham_.data());
   sgm_simd::hsum3_row(isa_, ham_.data(), D_, h0, h1, u0, u1,
                       ring_.data() + static_cast<std::size_t>(k % 3) * w_ * D);
 }

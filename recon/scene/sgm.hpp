@@ -60,18 +60,19 @@ class Sgm {
   SgmSettings s_;
   int w_, h_, D_;
   sgm_simd::Isa isa_;
-  std::vector<int> lo_, hi_;                   // per row: the columns matched (empty: lo = hi)
-  std::vector<std::uint32_t> cl_, cr_, crev_;  // one row's census, left and right (and reversed)
-  std::vector<std::int16_t> ham_;              // one row's Hamming distances, w x D
-  std::vector<std::int16_t> ring_;             // three rows of 3-column sums, 3 x w x D
-  int ring_row_[3] = {-1, -1, -1};             // the row each ring slot holds
-  std::vector<std::int16_t> cost_, sum_;       // this row's C and S, w x D
-  std::vector<std::int16_t> paths_;            // 2 x 3 rows of path values (w x (D + 2)), this and above
-  std::vector<std::int16_t> path_min_;         // their minima, 2 x 3 x w
-  std::vector<std::int16_t> horiz_;            // 4 blocks of D + 2: the two horizontal paths
-  std::vector<std::int16_t> start_;            // a zero block with padded ends
-  std::vector<std::int16_t> best_;             // one row's winner, d - min
-  std::vector<std::int16_t> rcost_, rdisp_;    // the right view's best S and disparity, one row, reversed
+  std::vector<int> lo_, hi_;                      // per row: the columns matched (empty: lo = hi)
+  std::vector<std::uint32_t> cl_, cr_;            // one row's census, left and right
+  std::vector<std::uint16_t> crev_lo_, crev_hi_;  // the right one reversed, low 16 and high 8 bits
+  std::vector<std::int16_t> ham_;                 // one row's Hamming distances, w x D
+  std::vector<std::int16_t> ring_;                // three rows of 3-column sums, 3 x w x D
+  int ring_row_[3] = {-1, -1, -1};                // the row each ring slot holds
+  std::vector<std::int16_t> cost_, sum_;          // this row's C and S, w x D
+  std::vector<std::int16_t> paths_;               // 2 x 3 rows of path values (w x (D + 2)), this and above
+  std::vector<std::int16_t> path_min_;            // their minima, 2 x 3 x w
+  std::vector<std::int16_t> horiz_;               // 4 blocks of D + 2: the two horizontal paths
+  std::vector<std::int16_t> start_;               // a zero block with padded ends
+  std::vector<std::int16_t> best_;                // one row's winner, d - min
+  std::vector<std::int16_t> rcost_, rdisp_;       // the right view's best S and disparity, one row, reversed
   int lr_refused_ = 0;
 };
 

@@ -28,10 +28,12 @@ void census_row(Isa isa, const float* img, std::size_t stride, int w, int h, int
                 std::uint32_t* out);
 
 // Hamming distances between the left census at x and the right one at x - dmin - d:
-// H[x * D + d] = popcount(cl[x] ^ cr_rev[w - 1 - x + dmin + d]) for x in [x0, x1), d in [0, D);
-// cr_rev is the right row's census reversed, so that the band is contiguous.
-void hamming_row(Isa isa, const std::uint32_t* cl, const std::uint32_t* cr_rev, int w, int dmin, int D,
-                 int x0, int x1, std::int16_t* H);
+// H[x * D + d] = popcount(cl[x] ^ cr[w - 1 - x + dmin + d]) for x in [x0, x1), d in [0, D), where
+// cr[j] = lo_rev[j] | hi_rev[j] << 16: the right row's census reversed, so that the band is
+// contiguous, and split into its low 16 and high 8 bits, so that the kernels count on 16-bit lanes
+// (twice the lanes of 32-bit ones, and no narrowing to the 16-bit costs).
+void hamming_row(Isa isa, const std::uint32_t* cl, const std::uint16_t* lo_rev, const std::uint16_t* hi_rev,
+                 int w, int dmin, int D, int x0, int x1, std::int16_t* H);
 
 // The 3-column sum of a Hamming row: out[x] = H[x - 1] + H[x] + H[x + 1] for x in [x0, x1), the
 // neighbours held to [h0, h1) (H is defined there; the pixel itself replaces a missing one).
