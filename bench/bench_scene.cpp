@@ -6,7 +6,10 @@
 //           (raw_to_luminance, min-max stretched to 8 bits for OpenCV).
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
-//   build/bench/bench_scene [--seeds N] [--bayer]
+//   build/bench/bench_scene [--seeds N] [--bayer] [--refusals] [--residual-p P] [--max-sigma PX]
+// --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
+// validity test it fails), summed over the renders, in % of the candidates. --residual-p P,
+// --max-sigma PX: that test's setting (dense_match.hpp) for a what-if run.
 #include <time.h>
 
 #include <Eigen/Core>  // before opencv2/core/eigen.hpp
@@ -192,12 +195,45 @@ struct OpenCvDense {
 
 }  // namespace
 
+void add_counts(recon::scene::MatchCounts& s, const recon::scene::MatchCounts& c) {
+  s.candidates += c.candidates;
+  s.no_integer += c.no_integer;
+  s.window += c.window;
+  s.shift += c.shift;
+  s.texture += c.texture;
+  s.converged += c.converged;
+  s.residual += c.residual;
+  s.left_right += c.left_right;
+  s.occluded += c.occluded;
+  s.valid += c.valid;
+}
+
+// Where the rectified candidates go: the first validity test each one fails (docs/scene.md, Validity).
+void print_refusals(const std::vector<recon::scene::MatchCounts>& rows) {
+  std::printf("\n%-10s | %8s %7s %7s %7s %7s %7s %7s %7s %7s %7s\n", "refusals", "cand", "no-int", "l-r",
+              "window", "shift", "sigma", "conv", "chi2", "occl", "valid");
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto& c = rows[k];
+    const double n = std::max(1, c.candidates) / 100.0;
+    std::printf("%-10s | %8d %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%%\n",
+                sim::textured_preset_names()[k].c_str(), c.candidates, c.no_integer / n, c.left_right / n,
+                c.window / n, c.shift / n, c.texture / n, c.converged / n, c.residual / n, c.occluded / n,
+                c.valid / n);
+  }
+  std::printf("%% of the rectified candidates (left data), summed over the renders\n");
+}
+
 int main(int argc, char** argv) {
   int seeds = 3;
-  bool bayer = false;
+  bool bayer = false, refusals = false;
+  recon::scene::DenseSettings ds;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) seeds = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--bayer")) bayer = true;
+    if (!std::strcmp(argv[i], "--refusals")) refusals = true;
+    // What-if: one validity test loosened, to see what the pixels it refuses would give.
+    if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
   }
   cv::setNumThreads(1);  // one core for both paths
   const recon::StereoRig rig =
@@ -207,10 +243,11 @@ int main(int argc, char** argv) {
   const sim::TexturedRenderer renderer(rig, sensor);
   recon::scene::SparseReconstructor ours(rig);
   recon::scene::SparseResult res;
-  recon::scene::DenseReconstructor dense(rig);
+  recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap depth;
   OpenCvDense cv_dense(rig);
   std::vector<std::pair<DenseTally, DenseTally>> dense_rows;
+  std::vector<recon::scene::MatchCounts> refused;
   std::printf("bench_scene: %d renders per scene, %s, paper-d3 rig, one thread\n", seeds,
               bayer ? "GRBG Bayer" : "mono");
   std::printf("%-10s | %-44s | %-44s\n", "", "ours (sparse)", "OpenCV path");
@@ -219,6 +256,7 @@ int main(int argc, char** argv) {
   for (const auto& name : sim::textured_preset_names()) {
     Tally a, b;
     DenseTally da, db;
+    recon::scene::MatchCounts mc;
     for (int s = 0; s < seeds; ++s) {
       sim::TexturedSceneSettings scene = *sim::textured_preset(name);
       scene.texture.seed += static_cast<std::uint64_t>(100 * s);
@@ -237,9 +275,11 @@ int main(int argc, char** argv) {
       dense.reconstruct(ours.luma(), depth);
       da.ms.push_back(1e3 * (thread_cpu_s() - t1));
       da.add(cv::Mat(depth.height, depth.width, CV_32FC1, depth.z_mm.data()), p.depth);
+      add_counts(mc, dense.match_counts());
       cv_dense.run(ours.luma(), p.depth, db);
     }
     dense_rows.emplace_back(da, db);
+    refused.push_back(mc);
     auto row = [](Tally& t) {
       std::printf(" %7.2f %7.0f %9.0f %8.2f%% %6.2f%%", t.p50(), double(t.points) / t.pairs,
                   double(t.points - t.outliers) / t.pairs, 100.0 * t.outliers / std::max(1L, t.points),
@@ -273,5 +313,6 @@ int main(int argc, char** argv) {
   std::printf(
       "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
       "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%\n");
+  if (refusals) print_refusals(refused);
   return 0;
 }
