@@ -181,35 +181,30 @@ NANEYE_SGM_INLINE void aggregate_any(const PathRow& r) {
   }
 }
 
-// The bands the dense path uses (48 px: z 8-80 mm at f B = 235.5 px mm) and their neighbours are
-// compiled with their length; any other takes the general loop.
-void aggregate_sse(const PathRow& r) {
-  switch (r.D / Vec<16>::k16) {
+// The bands the dense path uses (48 px: z 8-80 mm at f B = 235.5 px mm) and their neighbours
+// (16-64 px) are compiled with their length; any other takes the general loop. D is a multiple of
+// 16 (Sgm's constructor asserts it).
+template <int B>
+NANEYE_SGM_INLINE void aggregate_band(const PathRow& r) {
+  constexpr int per16 = 16 / Vec<B>::k16;  // vectors per 16 disparities
+  switch (r.D / 16) {
+    case 1:
+      return aggregate_fixed<B, per16>(r);
     case 2:
-      return aggregate_fixed<16, 2>(r);
+      return aggregate_fixed<B, 2 * per16>(r);
+    case 3:
+      return aggregate_fixed<B, 3 * per16>(r);
     case 4:
-      return aggregate_fixed<16, 4>(r);
-    case 6:
-      return aggregate_fixed<16, 6>(r);
-    case 8:
-      return aggregate_fixed<16, 8>(r);
+      return aggregate_fixed<B, 4 * per16>(r);
     default:
-      return aggregate_any<16>(r);
+      return aggregate_any<B>(r);
   }
 }
+void aggregate_sse(const PathRow& r) {
+  aggregate_band<16>(r);
+}
 __attribute__((target("avx2"))) void aggregate_avx2(const PathRow& r) {
-  switch (r.D / Vec<32>::k16) {
-    case 1:
-      return aggregate_fixed<32, 1>(r);
-    case 2:
-      return aggregate_fixed<32, 2>(r);
-    case 3:
-      return aggregate_fixed<32, 3>(r);
-    case 4:
-      return aggregate_fixed<32, 4>(r);
-    default:
-      return aggregate_any<32>(r);
-  }
+  aggregate_band<32>(r);
 }
 
 }  // namespace
