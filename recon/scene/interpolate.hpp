@@ -18,17 +18,22 @@ inline void keys_weights(float t, float* w) {
   w[3] = 0.5f * t3 - 0.5f * t2;
 }
 
+// The 4 x 4 taps from `p` (their top-left, rows `width` apart) weighted by wx, wy: rows top to
+// bottom, each row's taps left to right. Every vector kernel (keys_simd.hpp) keeps this order.
+inline float cubic_from_taps(const float* p, int width, const float* wx, const float* wy) {
+  float acc = 0;
+  for (int i = 0; i < 4; ++i, p += width)
+    acc += wy[i] * (wx[0] * p[0] + wx[1] * p[1] + wx[2] * p[2] + wx[3] * p[3]);
+  return acc;
+}
+
 // The caller keeps (x, y) inside [1, w - 3] x [1, h - 3].
 inline float sample_cubic(const GrayView& g, double x, double y) {
   const int c = static_cast<int>(x), r = static_cast<int>(y);
   float wx[4], wy[4];
   keys_weights(static_cast<float>(x - c), wx);
   keys_weights(static_cast<float>(y - r), wy);
-  const float* p = g.data + (r - 1) * g.width + (c - 1);
-  float acc = 0;
-  for (int i = 0; i < 4; ++i, p += g.width)
-    acc += wy[i] * (wx[0] * p[0] + wx[1] * p[1] + wx[2] * p[2] + wx[3] * p[3]);
-  return acc;
+  return cubic_from_taps(g.data + (r - 1) * g.width + (c - 1), g.width, wx, wy);
 }
 
 // The same anywhere in the image: taps beyond the border repeat the edge pixel.

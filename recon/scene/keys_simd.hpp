@@ -1,6 +1,6 @@
 #pragma once
-// Keys' cubic convolution weights (interpolate.hpp's keys_weights) on whole vectors: the same
-// expressions in the same order, so every width gives the scalar weights to the bit (no fused
+// Keys' cubic convolution (interpolate.hpp's keys_weights and cubic_from_taps) on whole vectors: the
+// same expressions in the same order, so every width gives the scalar results to the bit (no fused
 // multiply-add: the AVX2 functions are compiled for "avx2" alone, and ISO C++ mode does not contract).
 // Shared by the LK's sampling (lk_sample.cpp) and the dense path's rectification (resample_kernels.cpp).
 #include <immintrin.h>
@@ -31,6 +31,47 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void keys8(__m256 t, __m256* 
       _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(-1.5f), t3), _mm256_mul_ps(_mm256_set1_ps(2.0f), t2)),
       _mm256_mul_ps(_mm256_set1_ps(0.5f), t));
   k[3] = _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), t3), _mm256_mul_ps(_mm256_set1_ps(0.5f), t2));
+}
+// base[idx] per lane.
+template <class V, class I>
+NANEYE_SIMD_INLINE void gather(const float* base, const I& idx, V& v) {
+  for (int l = 0; l < simd::kLanes<V>; ++l) v[l] = base[idx[l]];
+}
+
+// cubic_from_taps per lane: the 4 x 4 taps from base[idx] (their top-left, rows `width` apart).
+template <class V, class I>
+NANEYE_SIMD_INLINE V cubic_from_taps_v(const float* base, I idx, int width, const V wx[4], const V wy[4]) {
+  V acc = V{} + 0.f;
+  for (int i = 0; i < 4; ++i, idx += width) {
+    V p0, p1, p2, p3;
+    gather<V>(base, idx, p0);
+    gather<V>(base, idx + 1, p1);
+    gather<V>(base, idx + 2, p2);
+    gather<V>(base, idx + 3, p3);
+    acc += wy[i] * (wx[0] * p0 + wx[1] * p1 + wx[2] * p2 + wx[3] * p3);
+  }
+  return acc;
+}
+
+// The same in AVX2 with its gather instruction (16 gathers per 8 points, where lane-by-lane loads
+// took 128 loads and inserts).
+__attribute__((target("avx2"))) NANEYE_SIMD_INLINE __m256 cubic_from_taps8(const float* base, __m256i idx,
+                                                                           int width, const __m256* wx,
+                                                                           const __m256* wy) {
+  const __m256i step = _mm256_set1_epi32(width);
+  __m256 acc = _mm256_setzero_ps();
+  for (int i = 0; i < 4; ++i, idx = _mm256_add_epi32(idx, step)) {
+    const __m256 p0 = _mm256_i32gather_ps(base, idx, 4);
+    const __m256 p1 = _mm256_i32gather_ps(base + 1, idx, 4);
+    const __m256 p2 = _mm256_i32gather_ps(base + 2, idx, 4);
+    const __m256 p3 = _mm256_i32gather_ps(base + 3, idx, 4);
+    const __m256 row =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(wx[0], p0), _mm256_mul_ps(wx[1], p1)),
+                                    _mm256_mul_ps(wx[2], p2)),
+                      _mm256_mul_ps(wx[3], p3));
+    acc = _mm256_add_ps(acc, _mm256_mul_ps(wy[i], row));
+  }
+  return acc;
 }
 
 }  // namespace naneye::recon::scene

@@ -26,11 +26,7 @@ void taps_plain(const float* raw, int raw_width, const int* tap, const float* fx
     float wx[4], wy[4];
     keys_weights(fx[i], wx);
     keys_weights(fy[i], wy);
-    const float* p = raw + tap[i] - raw_width - 1;
-    float v = 0;
-    for (int r = 0; r < 4; ++r, p += raw_width)
-      v += wy[r] * (wx[0] * p[0] + wx[1] * p[1] + wx[2] * p[2] + wx[3] * p[3]);
-    out[i] = v;
+    out[i] = cubic_from_taps(raw + tap[i] - raw_width - 1, raw_width, wx, wy);
   }
 }
 
@@ -45,46 +41,28 @@ void taps_sse(const float* raw, int raw_width, const int* tap, const float* fx, 
     VI4 t;
     __builtin_memcpy(&t, tap + i, sizeof t);
     const VI4 valid = t >= 0;
-    VI4 idx = (valid ? t : safe) - back;
+    const VI4 idx = (valid ? t : safe) - back;
     V wx[4], wy[4];
     keys_v<V>(load<V>(fx + i), wx);
     keys_v<V>(load<V>(fy + i), wy);
-    V acc = V{} + 0.f;
-    for (int r = 0; r < 4; ++r, idx += raw_width) {
-      V p[4];
-      for (int c = 0; c < 4; ++c)
-        for (std::size_t l = 0; l < L; ++l) p[c][l] = raw[idx[l] + c];
-      acc += wy[r] * (wx[0] * p[0] + wx[1] * p[1] + wx[2] * p[2] + wx[3] * p[3]);
-    }
-    store(out + i, valid ? acc : V{} + 0.f);
+    store(out + i, valid ? cubic_from_taps_v<V>(raw, idx, raw_width, wx, wy) : V{} + 0.f);
   }
   taps_plain(raw, raw_width, tap, fx, fy, i, n, out);
 }
 
 __attribute__((target("avx2"))) void taps_avx2(const float* raw, int raw_width, const int* tap,
                                                const float* fx, const float* fy, std::size_t n, float* out) {
-  const __m256i width = _mm256_set1_epi32(raw_width), back = _mm256_set1_epi32(raw_width + 1);
+  const __m256i back = _mm256_set1_epi32(raw_width + 1);
   std::size_t i = 0;
   for (; i + 8 <= n; i += 8) {
     const __m256i t = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(tap + i));
     const __m256i invalid = _mm256_cmpgt_epi32(_mm256_setzero_si256(), t);
     // An invalid lane reads the first 4 x 4 taps of the image (always there) and is zeroed after.
-    __m256i idx = _mm256_sub_epi32(_mm256_blendv_epi8(t, back, invalid), back);
+    const __m256i idx = _mm256_sub_epi32(_mm256_blendv_epi8(t, back, invalid), back);
     __m256 wx[4], wy[4];
     keys8(_mm256_loadu_ps(fx + i), wx);
     keys8(_mm256_loadu_ps(fy + i), wy);
-    __m256 acc = _mm256_setzero_ps();
-    for (int r = 0; r < 4; ++r, idx = _mm256_add_epi32(idx, width)) {
-      const __m256 p0 = _mm256_i32gather_ps(raw, idx, 4);
-      const __m256 p1 = _mm256_i32gather_ps(raw + 1, idx, 4);
-      const __m256 p2 = _mm256_i32gather_ps(raw + 2, idx, 4);
-      const __m256 p3 = _mm256_i32gather_ps(raw + 3, idx, 4);
-      const __m256 row =
-          _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(wx[0], p0), _mm256_mul_ps(wx[1], p1)),
-                                      _mm256_mul_ps(wx[2], p2)),
-                        _mm256_mul_ps(wx[3], p3));
-      acc = _mm256_add_ps(acc, _mm256_mul_ps(wy[r], row));
-    }
+    const __m256 acc = cubic_from_taps8(raw, idx, raw_width, wx, wy);
     _mm256_storeu_ps(out + i, _mm256_andnot_ps(_mm256_castsi256_ps(invalid), acc));
   }
   taps_plain(raw, raw_width, tap, fx, fy, i, n, out);
