@@ -96,4 +96,28 @@ int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen
   return 0;
 }
 
+bool grid_line_continues(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& u,
+                         const Eigen::Vector2d& v) {
+  // Samples a quarter step on either side of the line, at a quarter, half and three quarters of the
+  // step along it: every sample a quarter step from each edge of its square, which must be >= 2.5 px
+  // (quadrant_polarity's bound: outside the edges' blur). Smaller squares cannot be told apart here.
+  if (0.25 * std::min(u.norm(), v.norm()) < 2.5) return true;
+  for (const double t : {0.25, 0.5, 0.75}) {
+    const Eigen::Vector2d o = p + t * u, i = p - t * u;
+    const float o1 = bilinear(img, (o + 0.25 * v).x(), (o + 0.25 * v).y());
+    const float o2 = bilinear(img, (o - 0.25 * v).x(), (o - 0.25 * v).y());
+    const float i1 = bilinear(img, (i + 0.25 * v).x(), (i + 0.25 * v).y());
+    const float i2 = bilinear(img, (i - 0.25 * v).x(), (i - 0.25 * v).y());
+    // Beyond the image the line cannot be followed: what was seen up to there decides (nothing
+    // seen: it may continue, and the placement stays uncertain).
+    if (o1 < 0 || o2 < 0 || i1 < 0 || i2 < 0) return true;
+    // Across the junction the squares swap colour: the outer line's contrast has the inner line's
+    // opposite sign, and at least half its size at the same distance from the junction (the margin
+    // the quadrant test allows an X-junction's pairs; shading over a step changes it by less).
+    const float inner = i1 - i2, outer = o1 - o2;
+    if (!(-outer * (inner > 0 ? 1.0f : -1.0f) >= 0.5f * std::abs(inner))) return false;
+  }
+  return true;
+}
+
 }  // namespace naneye::recon

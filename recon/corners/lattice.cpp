@@ -287,7 +287,20 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
             const bool next = ci >= i - 1 && ci <= i + w && cj >= j - 1 && cj <= j + h;
             // Only saddles the map found: a filled hole is a prediction, no evidence of a next row.
             const bool observed = cand_[static_cast<std::size_t>(at(ci, cj))].response > 0.0f;
-            adjacent_x += !in && next && observed && sign[static_cast<std::size_t>(k)] == board_sign;
+            if (in || !next || !observed || sign[static_cast<std::size_t>(k)] != board_sign) continue;
+            // An X-junction beside the placement is a next row only where the grid lines through it
+            // run on away from the placement (grid_line_continues): clutter beside a board's margin
+            // can make the junction look like an X (a bright monitor behind OpenCV's right08).
+            Eigen::Vector2d dc, dr;
+            if (steps(ci, cj, dc, dr)) {
+              const Eigen::Vector2d p = cand_[static_cast<std::size_t>(at(ci, cj))].px.cast<double>();
+              const bool lines = (ci >= i || grid_line_continues(*img_, p, -dc, dr)) &&
+                                 (ci < i + w || grid_line_continues(*img_, p, dc, dr)) &&
+                                 (cj >= j || grid_line_continues(*img_, p, -dr, dc)) &&
+                                 (cj < j + h || grid_line_continues(*img_, p, dr, dc));
+              if (!lines) continue;
+            }
+            ++adjacent_x;
           }
           if (adjacent_x > kMaxStrayCells) {
             ++uncertain;

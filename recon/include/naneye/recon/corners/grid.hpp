@@ -24,5 +24,14 @@ int corner_polarity(const LumaView& img, const CornerResult& r, int row, int col
 // are sampled at their centres when `square_centres` (the steps are the board's, not a false link's).
 int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& dc,
                       const Eigen::Vector2d& dr, bool square_centres = true);
+// Whether the grid line through an X-junction at p runs on for a whole step beyond the board: u is
+// the grid step pointing away from the board (the row or column that would come next), v the other
+// step. A larger board's next row has squares there, so the line between them carries the board's
+// contrast (opposite in sign to the line between the last squares inside, -u) from the junction to
+// the next one; clutter that happens to make an X at the junction (a bright object beside the
+// margin) does not run straight along the grid line for a step. Returns true when it does, or when
+// the samples cannot tell (out of the image, or squares too small to sample beside the edges).
+bool grid_line_continues(const LumaView& img, const Eigen::Vector2d& p, const Eigen::Vector2d& u,
+                         const Eigen::Vector2d& v);
 
 }  // namespace naneye::recon
