@@ -285,11 +285,12 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
   auto s1 = status();
   std::printf(
       "naneyed replaying at %.1f fps: capture-to-published p50 %.3f ms, p99 %.3f ms, max %.3f ms (%d pairs); "
-      "processing p50 %.4f ms p99 %.4f ms\n",
+      "processing p50 %.4f ms p99 %.4f ms; pairs processed %lld, superseded by a newer one %lld\n",
       s1["fps"]["left"].get<double>(), s1["capture_to_publish_ms"]["p50"].get<double>(),
       s1["capture_to_publish_ms"]["p99"].get<double>(), s1["capture_to_publish_ms"]["max"].get<double>(),
       s1["capture_to_publish_ms"]["samples"].get<int>(), s1["recon_ms"]["p50"].get<double>(),
-      s1["recon_ms"]["p99"].get<double>());
+      s1["recon_ms"]["p99"].get<double>(), s1["pairs"]["processed"].get<long long>(),
+      s1["pairs"]["superseded"].get<long long>());
   const long rss_before = rss_kb(child.pid(), "VmRSS:");
   if (auto d = c.Get("/v1/depth"); d && d->status == 200) {
     const auto j = nlohmann::json::parse(d->body);

@@ -49,6 +49,8 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
   counter(os, "naneye_pairs_processed_total", "Stereo pairs reconstructed by the worker.", s.pairs_processed);
   counter(os, "naneye_results_unpublished_total",
           "Results computed but not published because readers pinned every slot.", s.publish_skipped);
+  counter(os, "naneye_pairs_superseded_total",
+          "Live pairs not reconstructed because a newer pair was waiting behind them.", s.pairs_superseded);
   driver::for_each_counter(c, [&os](const char* name, const char* help, std::uint64_t v) {
     counter(os, std::string("naneye_source_") + name + "_total", help, v);
   });

@@ -60,6 +60,17 @@ void Pipeline::run() {
     driver::FrameSource* src = source_.ready();
     if (!src) continue;
     if (auto pair = src->next(std::chrono::milliseconds(50))) {
+      // A live source's ring is a hand-over, not a queue: when pairs wait behind this one the worker
+      // is slower than the camera, and processing them in order would publish each one as late as
+      // the ring is long (155-173 ms with 8 pairs in scene mode, docs/http-api.md). The newest is
+      // the one a client asks about; the older ones go back to the pool, superseded (recording
+      // taps the bytes on the capture thread and loses nothing). A lossless replay keeps its order.
+      if (source_.live()) {
+        while (auto newer = src->next(std::chrono::milliseconds(0))) {
+          stats_.superseded();
+          pair = std::move(newer);
+        }
+      }
       handle(std::move(pair));
       source_.healthy();
       continue;

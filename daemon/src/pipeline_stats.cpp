@@ -20,18 +20,23 @@ void PipelineStats::record(const Published& p, bool published, const driver::Ste
   if (p.capture_ns > 0 && since_capture >= 0 && since_capture < 10'000'000'000) {
     capture_latency_.record(since_capture);
   }
-  update_fps(pair.left.sensor_ns, left_period_, fps_left_);
-  update_fps(pair.right.sensor_ns, right_period_, fps_right_);
+  update_fps(pair.left.sensor_ns, pair.index, left_period_, fps_left_);
+  update_fps(pair.right.sensor_ns, pair.index, right_period_, fps_right_);
   offset_ns_.store(pair.offset_ns(), std::memory_order_relaxed);
 }
 
 // Sensor frame rates from the sensors' own clocks: an exponential average of the frame period.
-// A period far above the average is a gap (a lost record, a replay looping), not a rate change,
-// unless it persists.
-void PipelineStats::update_fps(std::int64_t now, PeriodEstimate& e, std::atomic<double>& fps) {
-  const bool first = e.last == kNoTime;
-  const auto dt = static_cast<double>(first ? 0 : now - e.last);
+// The time between two processed pairs is shared by the pairs the source delivered in between
+// (dropped by a full ring, or superseded by a newer pair while the worker was busy): the camera's
+// rate, not the worker's. A period far above the average is a gap (a lost record, a replay
+// looping), not a rate change, unless it persists.
+void PipelineStats::update_fps(std::int64_t now, std::uint64_t index, PeriodEstimate& e,
+                               std::atomic<double>& fps) {
+  // A reopened source numbers its pairs from 0 again: a new start, like the first pair.
+  const bool first = e.last == kNoTime || index <= e.last_index;
+  const double dt = first ? 0 : static_cast<double>(now - e.last) / static_cast<double>(index - e.last_index);
   e.last = now;
+  e.last_index = index;
   if (first || dt <= 0 || dt > 1e9) return;
   if (e.period > 0 && dt > 1.5 * e.period && ++e.rejected < 8) return;
   e.rejected = 0;
@@ -42,6 +47,7 @@ void PipelineStats::update_fps(std::int64_t now, PeriodEstimate& e, std::atomic<
 void PipelineStats::fill(PipelineStatus& s) const {
   s.pairs_processed = processed_.load(std::memory_order_relaxed);
   s.publish_skipped = skipped_.load(std::memory_order_relaxed);
+  s.pairs_superseded = superseded_.load(std::memory_order_relaxed);
   s.fps_left = fps_left_.load(std::memory_order_relaxed);
   s.fps_right = fps_right_.load(std::memory_order_relaxed);
   s.offset_ns = offset_ns_.load(std::memory_order_relaxed);

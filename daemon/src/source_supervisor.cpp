@@ -21,6 +21,7 @@ bool SourceSupervisor::open() {
     auto src = opener_(choice_.uri);
     src->start();
     const auto info = src->info();
+    live_ = info.live;
     {
       std::lock_guard lock(mu_);
       source_ = std::move(src);

@@ -25,7 +25,8 @@ struct PipelineStatus {
   SourceChoice choice;
   std::string processor;
   std::uint64_t pairs_processed = 0;
-  std::uint64_t publish_skipped = 0;  // every slot pinned by readers: result computed, not published
+  std::uint64_t publish_skipped = 0;   // every slot pinned by readers: result computed, not published
+  std::uint64_t pairs_superseded = 0;  // live pairs not processed: a newer one waited behind them
   std::uint64_t source_opens = 0, source_open_failures = 0;
   std::uint64_t calibration_reloads = 0;
   std::uint64_t calibration_reload_failures = 0;

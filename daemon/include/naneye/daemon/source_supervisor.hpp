@@ -44,6 +44,9 @@ class SourceSupervisor {
   // Worker: the open source, or null when there is none (an open is tried when its delay is up,
   // else the call sleeps ~20 ms).
   driver::FrameSource* ready();
+  // Worker: whether the open source is live (drops its oldest pair when the worker is behind) rather
+  // than a lossless replay; read once when it opened (info() copies strings).
+  bool live() const { return live_; }
   // Worker: a pair came, the source works: the next delay starts from the shortest again.
   void healthy() { backoff_.reset(); }
   // Worker: next() gave nothing. A source that failed is closed and reopened after a delay; one that
@@ -74,6 +77,7 @@ class SourceSupervisor {
   mutable std::mutex mu_;  // guards replacing source_ against snapshot()
   std::unique_ptr<driver::FrameSource> source_;
   std::atomic<bool> waiting_{false};
+  bool live_ = true;  // worker only
 };
 
 }  // namespace naneye::daemon
