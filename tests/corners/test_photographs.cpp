@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -32,19 +33,19 @@ constexpr double kPlaneSlackPx = 0.1;
 // needs the lens only to straighten edges and to test that the grid is a plane; the set ships the
 // left camera's calibration alone, and the right lens differs enough that its grids fail the plane
 // test (0.5 px) with the left's.
-CameraModel opencv_camera(const std::vector<std::vector<cv::Point2f>>& corners, double& rms) {
+CameraModel opencv_camera(const std::vector<std::vector<cv::Point2f>>& corners, cv::Size size, double& rms) {
   std::vector<std::vector<cv::Point3f>> object(corners.size());
   for (auto& o : object)
     for (int r = 0; r < 6; ++r)
       for (int c = 0; c < 9; ++c) o.emplace_back(static_cast<float>(c), static_cast<float>(r), 0.0f);
   cv::Mat K = cv::Mat::eye(3, 3, CV_64F), D;
   std::vector<cv::Mat> rv, tv;
-  rms = cv::calibrateCamera(object, corners, cv::Size(640, 480), K, D, rv, tv, cv::CALIB_FIX_ASPECT_RATIO);
+  rms = cv::calibrateCamera(object, corners, size, K, D, rv, tv, cv::CALIB_FIX_ASPECT_RATIO);
   Eigen::Matrix3d k;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) k(r, c) = K.at<double>(r, c);
   const Distortion d{D.at<double>(0), D.at<double>(1), D.at<double>(2), D.at<double>(3), D.at<double>(4)};
-  return CameraModel(k, d, 640, 480);
+  return CameraModel(k, d, size.width, size.height);
 }
 
 // 8-bit grey -> 10-bit DN (x4), the scale the detector's physical constants are stated in.
@@ -98,9 +99,13 @@ struct PhotoSet {
   std::vector<std::vector<cv::Point2f>> refs[2];
 };
 
-// OpenCV's corners of every image first: they calibrate each eye for the detector. Loaded once.
-const PhotoSet& photo_set() {
-  static const PhotoSet set = [] {
+// OpenCV's corners of every image first: they calibrate each eye for the detector. Loaded once per
+// scale. Enlarged (`scale` > 1, cubic) the boards' squares grow to scale x 25-45 px, and the
+// references are OpenCV's corners of the original, mapped to the enlarged pixels (centres at integers).
+const PhotoSet& photo_set(int scale = 1) {
+  static std::map<int, PhotoSet> sets;
+  if (auto it = sets.find(scale); it != sets.end()) return it->second;
+  return sets[scale] = [scale] {
     PhotoSet ps;
     for (int k = 1; k <= 14; ++k) {
       for (int e = 0; e < 2; ++e) {
@@ -115,22 +120,26 @@ const PhotoSet& photo_set() {
         }
         cv::cornerSubPix(im.gray, im.ref, cv::Size(11, 11), cv::Size(-1, -1),
                          cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01));
+        if (scale > 1) {
+          cv::resize(im.gray, im.gray, cv::Size(), scale, scale, cv::INTER_CUBIC);
+          for (cv::Point2f& q : im.ref) q = (q + cv::Point2f(0.5f, 0.5f)) * scale - cv::Point2f(0.5f, 0.5f);
+        }
         ps.refs[e].push_back(im.ref);
         ps.eyes[e].push_back(std::move(im));
       }
     }
     return ps;
   }();
-  return set;
 }
 
-TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
-  if (!std::filesystem::exists(std::string(kDir) + "/left01.jpg")) {
-    GTEST_SKIP() << "opencv-doc is not installed (scripts/install-deps.sh installs it)";
-  }
-  const PhotoSet& set = photo_set();
+// Every board of the set found, every unflagged corner within 0.3 px (x scale) of cornerSubPix's or
+// judged by the board's plane.
+void check_photographs(int scale, int max_off_plane) {
+  int off_plane = 0;
+  const PhotoSet& set = photo_set(scale);
   const auto& eyes = set.eyes;
   const auto& refs = set.refs;
+  const double agree_px = kAgreePx * scale, plane_slack_px = kPlaneSlackPx * scale;
   CornerSettings s;
   s.board.rows = 6;
   s.board.cols = 9;
@@ -140,7 +149,7 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
   double poor_worst = 0, plane_gain = 0, plane_worst = 0;
   for (int e = 0; e < 2; ++e) {
     double cal_rms = 0;
-    const CameraModel cam = opencv_camera(refs[e], cal_rms);
+    const CameraModel cam = opencv_camera(refs[e], eyes[e].front().gray.size(), cal_rms);
     std::printf("OpenCV's calibration of the %s eye: fx %.2f px, RMS %.3f px\n", e == 0 ? "left" : "right",
                 cam.fx(), cal_rms);
     CornerDetector det(cam, s);
@@ -177,7 +186,7 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
           poor_worst = std::max(poor_worst, best);
           continue;
         }
-        if (best > kAgreePx) {
+        if (best > agree_px) {
           // cornerSubPix's corner can be drawn off a junction whose edges do not meet in one point
           // (the board's broken border row): the plane says which of the two is the board's.
           const cv::Point2f& q = ref[static_cast<std::size_t>(nearest)];
@@ -187,9 +196,13 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
           // than the lens it undistorts with (0.41 / 0.46 px), and a corner off by more is wrong
           // whatever cornerSubPix did.
           EXPECT_LE(ours_off, 2.0 * cal_rms) << name << " corner " << i;
-          EXPECT_LE(ours_off, theirs_off + kPlaneSlackPx)
-              << name << " corner " << i << ": " << best << " px from cornerSubPix's, " << ours_off
-              << " px off the board's plane against its " << theirs_off;
+          if (ours_off > theirs_off + plane_slack_px) {
+            ++off_plane;
+            std::printf(
+                "%s corner %d: %.3f px from cornerSubPix's, %.3f px off the board's plane against "
+                "its %.3f\n",
+                name, i, best, ours_off, theirs_off);
+          }
           ++judged_by_plane;
           plane_gain = std::max(plane_gain, theirs_off - ours_off);
           plane_worst = std::max(plane_worst, ours_off);
@@ -202,16 +215,38 @@ TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
     }
   }
   std::printf(
-      "photographs: %d/%d images found; %d corners within %.1f px of cornerSubPix (%.3f px RMS, worst "
+      "photographs x %d: %d/%d images found; %d corners within %.1f px of cornerSubPix (%.3f px RMS, worst "
       "%.3f px); %d farther, judged by the board's plane (ours at most %.2f px off it, cornerSubPix's up "
       "to %.2f px farther than ours); %d flagged poor (worst %.2f px from cornerSubPix's)\n",
-      found, images, n, kAgreePx, n ? std::sqrt(sum2 / n) : 0.0, worst, judged_by_plane, plane_worst,
+      scale, found, images, n, agree_px, n ? std::sqrt(sum2 / n) : 0.0, worst, judged_by_plane, plane_worst,
       plane_gain, poor, poor_worst);
   EXPECT_EQ(images, 26);
   EXPECT_EQ(found, 26);  // the issue's target: every board in both eyes
   // JPEG misfits every corner of a frame alike (6-13 % of the contrast): the poor flag marks a
   // frame's outliers, not the frame (it flagged 1339 of 1350 when it was a fixed 5 %).
   EXPECT_LE(20 * poor, n + judged_by_plane + poor);
+  EXPECT_LE(off_plane, max_off_plane);
+}
+
+TEST(Photographs, OpenCvSampleSetEveryCornerWithinPointThreePxOfCornerSubPix) {
+  if (!std::filesystem::exists(std::string(kDir) + "/left01.jpg")) {
+    GTEST_SKIP() << "opencv-doc is not installed (scripts/install-deps.sh installs it)";
+  }
+  check_photographs(1, 0);
+}
+
+// Any scale: the same photographs enlarged twice, 1280 x 960 with squares of 50-90 px (the issue asks
+// for 60 px) and edges blurred to ~2 px. Found through the detector's next pyramid level (7 of 26
+// before it, at this level alone); the tolerances scale with the image. The enlarged image is not
+// the original: cubic interpolation's ringing and the level's 2 x 2 binning move a few corners at
+// the boards' broken border junctions (docs/corners.md, "Real photographs"): 3 of the 1404 are
+// farther from the plane than cornerSubPix's by more than the slack (left13 and right07 corner 8,
+// right08 corner 52: 0.14-0.74 px beyond it), all within twice the lens's RMS of the plane.
+TEST(Photographs, TheSameSetEnlargedTwiceIsFoundAsWell) {
+  if (!std::filesystem::exists(std::string(kDir) + "/left01.jpg")) {
+    GTEST_SKIP() << "opencv-doc is not installed (scripts/install-deps.sh installs it)";
+  }
+  check_photographs(2, 3);
 }
 
 // Never a false board: a larger board whose next row is partly hidden fits the smaller pattern in
@@ -230,7 +265,7 @@ TEST(Photographs, ALargerBoardWithItsNextRowPartlyHiddenIsNotTakenForTheSmallerP
   int images = 0, found = 0;
   for (int e = 0; e < 2; ++e) {
     double cal_rms = 0;
-    CornerDetector det(opencv_camera(set.refs[e], cal_rms), s);
+    CornerDetector det(opencv_camera(set.refs[e], set.eyes[e].front().gray.size(), cal_rms), s);
     for (const Image& im : set.eyes[e]) {
       cv::Mat gray = im.gray.clone();
       // OpenCV orders its corners from either end of the board: hide corners 0-3 of whichever row

@@ -176,6 +176,10 @@ class CornerDetector {
   double position_se(const SaddleFit& fit) const;
 
  private:
+  // This level's detection: tracking from `previous`, else a full search.
+  bool detect_here(const RawImageView& image, const CornerResult* previous, CornerResult& out);
+  // The next pyramid level's (half_): the frame binned 2 x 2, its corners scaled back to this level.
+  bool detect_half(const RawImageView& image, bool track_previous, CornerResult& out);
   bool track(const CornerResult& previous, CornerResult& out, bool band);
   std::pair<int, int> tracking_rows(const CornerResult& previous) const;  // [first, last + 1)
   bool full_search(CornerResult& out);
@@ -217,6 +221,14 @@ class CornerDetector {
   std::shared_ptr<const UndistortMap> map_;
   std::vector<FastFitScratch> work_;  // one fit's work space (a vector: copies get their own)
   std::array<EdgeDirections, kMaxCorners> edges_{};
+  // The next pyramid level, for boards whose squares outgrow this level's pixel scales (the saddle
+  // map's ring of 3 px, fit windows of at most max_radius): empty when the half image would be
+  // smaller than kMinLevelSide (detector.cpp), as for the NanEye's own 250 x 250 frames. A vector
+  // so that copies of the detector get their own.
+  std::vector<CornerDetector> half_;
+  std::vector<std::uint16_t> half_raw_;
+  CornerResult half_result_, half_previous_;
+  bool from_half_ = false;  // the last board was found at the next level: track there first
 };
 
 // The luminance of a raw frame, without moving any edge: mono is copied; GRBG Bayer is filtered
