@@ -16,9 +16,21 @@ constexpr int kMaxN = 15 * 15;
 
 }  // namespace
 
+double noise_dof_factor(const std::array<float, 9>& b) {
+  // The noise's autocorrelation is the kernel's with itself, lags -2..2 in both directions.
+  double acf[5][5] = {};
+  for (int i = 0; i < 9; ++i)
+    for (int j = 0; j < 9; ++j) acf[j / 3 - i / 3 + 2][j % 3 - i % 3 + 2] += double(b[i]) * b[j];
+  double sum = 0;
+  for (const auto& row : acf)
+    for (double a : row) sum += (a / acf[2][2]) * (a / acf[2][2]);
+  return sum;
+}
+
 LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, int u, int v,
                        const GrayView& dst, const std::uint8_t* dst_usable, const Eigen::Vector2d& start,
-                       const Eigen::Matrix2d& A0, const Eigen::Vector2d* shape, const LkSettings& s) {
+                       const Eigen::Matrix2d& A0, const Eigen::Vector2d* shape, const LkSettings& s,
+                       const Eigen::Matrix2d* start_linear) {
   LkResult out;
   const int rad = s.radius, side = 2 * rad + 1, n = side * side;
   if (n > kMaxN || n <= 8) return out;
@@ -40,6 +52,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   std::array<float, kMaxN> qx{}, qy{};  // q as the sampling kernel reads it
   const Eigen::Matrix2d to_q = shape ? Eigen::Matrix2d(A0.inverse()) : Eigen::Matrix2d::Identity();
   Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 6> Hin = H;  // over the inner pixels (LkSettings::inner_radius)
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
     for (int dc = -rad; dc <= rad; ++dc, ++k) {
       t[k] = static_cast<float>((t[k] - mean) * scale);
@@ -50,8 +63,13 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const Eigen::RowVector2d g = Eigen::RowVector2d(tgx[p] * scale, tgy[p] * scale) * to_q;
       // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5).
       sd[k] << g.x() * q[k].x(), g.x() * q[k].y(), g.y() * q[k].x(), g.y() * q[k].y(), g.x(), g.y();
-      H.noalias() += sd[k] * sd[k].transpose();
+      // With inner_radius, H = Hin + the ring's sum (one outer product per pixel either way).
+      if (s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius)
+        Hin.noalias() += sd[k] * sd[k].transpose();
+      else
+        H.noalias() += sd[k] * sd[k].transpose();
     }
+  H += Hin;
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (ldlt.info() != Eigen::Success) return out;
   // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
@@ -66,7 +84,10 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   }
   // The warp as a 3x3 matrix, template coordinates (relative to (u, v)) -> target raw pixels.
   Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
-  if (!shape) M.topLeftCorner<2, 2>() = A0;
+  if (start_linear)
+    M.topLeftCorner<2, 2>() = *start_linear;
+  else if (!shape)
+    M.topLeftCorner<2, 2>() = A0;
   M.topRightCorner<2, 1>() = start;
   std::array<float, kMaxN> wi{};
   // The warped window wi, normalised to zero mean and unit norm (w = sc (wi - m)), enters only
@@ -75,8 +96,8 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   // products over the raw samples replaces normalising them and summing the residual (three passes).
   // Double sums of float samples: var = sum wi^2 - m sum wi cancels ~(mean / contrast)^2 ~ 1e4 of
   // 1e-16, far below the noise.
-  Eigen::Matrix<double, 6, 1> grad;  // b above
-  double ssr = 0;
+  Eigen::Matrix<double, 6, 1> grad;         // b above
+  double ssr = 0, mean_w = 0, scale_w = 0;  // the last sample's SSR, window mean and 1 / norm
   auto sample = [&]() {
     const Eigen::Vector2d c = M.topRightCorner<2, 1>();
     const int ci = round_half_away(c.x()), ri = round_half_away(c.y());
@@ -100,6 +121,8 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     const double sc = 1.0 / std::sqrt(var);
     grad = sc * (p - m * sd_sum) - sd_t;
     ssr = std::max(0.0, 1.0 - 2.0 * sc * (st - m * t_sum) + tt);
+    mean_w = m;
+    scale_w = sc;
     return true;
   };
   for (int it = 0; it < s.max_iterations; ++it) {
@@ -127,15 +150,29 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   out.A = M.topLeftCorner<2, 2>();
   // Both windows have unit norm: ZNCC = 1 - SSR / 2.
   out.zncc = 1.0 - 0.5 * ssr;
+  // The template was scaled by 1 / sqrt(ss): residuals back in its grey levels by sqrt(ss).
+  out.ssr_dn2 = ssr * ss;
+  if (s.inner_radius > 0) {
+    double outer = 0;
+    for (int dr = -rad, k = 0; dr <= rad; ++dr)
+      for (int dc = -rad; dc <= rad; ++dc, ++k) {
+        if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) continue;
+        const double e = scale_w * (wi[k] - mean_w) - t[k];
+        outer += e * e;
+      }
+    out.ssr_outer_dn2 = outer * ss;
+  }
   // Covariance of the template-frame translation, mapped to the target by the warp. Residual noise
   // per image pixel: s^2 = SSR / (N - 8); with correlated noise (lk_affine.hpp) the sandwich form.
   const double s2 = ssr / (n - 8);
-  const Eigen::Matrix<double, 6, 6> Hinv = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
+  // Only the translation's rows of H^-1 (H symmetric: the solve against the last two unit vectors).
+  const Eigen::Matrix<double, 2, 6> Pw =
+      ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
   const auto& b = s.noise_kernel;
   double b2 = 0;
   for (float x : b) b2 += double(x) * x;
   const bool white = b == LkSettings{}.noise_kernel;
-  Eigen::Matrix<double, 6, 6> B = white ? H : Eigen::Matrix<double, 6, 6>::Zero();  // white: B = H
+  Eigen::Matrix<double, 6, 6> B = Eigen::Matrix<double, 6, 6>::Zero();  // white: B = H, not needed
   // (b * SD) over the window grown by one pixel (the kernel's reach), zero outside the window.
   for (int r = -1; !white && r <= side; ++r)
     for (int c = -1; c <= side; ++c) {
@@ -148,8 +185,41 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
         }
       B.noalias() += f * f.transpose();
     }
-  const Eigen::Matrix<double, 6, 6> cov6 = (s2 / b2) * Hinv * B * Hinv;
-  out.cov = out.A * cov6.bottomRightCorner<2, 2>() * out.A.transpose();
+  const Eigen::Matrix2d cov_t =
+      white ? Eigen::Matrix2d(s2 * Pw.rightCols<2>()) : Eigen::Matrix2d((s2 / b2) * Pw * B * Pw.transpose());
+  out.cov = out.A * cov_t * out.A.transpose();
+  if (s.inner_radius > 0) {
+    // Linearised, each fit's translation is a weighted sum of the residuals: H^-1 sum_k sd_k e_k, the
+    // inner fit's over its own pixels. Their difference is sum_k g_k e_k, whose covariance is the
+    // same sandwich over g (exact for correlated noise, where the wide fit is not the efficient one
+    // and Hausman's Sigma_inner - Sigma_wide does not hold).
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> lin(Hin);
+    if (lin.info() != Eigen::Success) return LkResult{};
+    const Eigen::Matrix<double, 2, 6> Pin =
+        lin.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
+    // White noise: sum_k g_k g_k^T = (Hin^-1 - H^-1)_tt (Pin Hin = Pw H = the unit rows), Hausman's form.
+    Eigen::Matrix2d G = Pin.rightCols<2>() - Pw.rightCols<2>();
+    std::array<Eigen::Vector2d, kMaxN> g;
+    for (int dr = -rad, k = 0; !white && dr <= rad; ++dr)
+      for (int dc = -rad; dc <= rad; ++dc, ++k) {
+        g[k] = -Pw * sd[k];
+        if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) g[k] += Pin * sd[k];
+      }
+    if (!white) G.setZero();
+    for (int r = -1; !white && r <= side; ++r)
+      for (int c = -1; c <= side; ++c) {
+        Eigen::Vector2d f = Eigen::Vector2d::Zero();
+        for (int i = -1; i <= 1; ++i)
+          for (int j = -1; j <= 1; ++j) {
+            const int rr = r + i, cc = c + j;
+            if (rr < 0 || cc < 0 || rr >= side || cc >= side) continue;
+            f += double(b[(i + 1) * 3 + j + 1]) * g[rr * side + cc];
+          }
+        G.noalias() += f * f.transpose();
+      }
+    out.diff_cov_unit = out.A * (white ? G : Eigen::Matrix2d(G / b2)) * out.A.transpose();
+    out.template_ss_dn2 = ss;
+  }
   return out;
 }
 

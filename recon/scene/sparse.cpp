@@ -87,6 +87,10 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
+  const int wide = std::max(s_.wide_radius, s_.lk.radius);
+  usable_wide_[0] = usable_mask(rig_.left, layout, wide);
+  usable_wide_[1] = usable_mask(rig_.right, layout, wide + 1);
+  init_wide();
   id_scratch_.assign(static_cast<std::size_t>(s_.max_features), 0);
   rays_.assign(2 * np, 0.0);
   inv_norm_[0].assign(np, 0.f);
@@ -142,22 +146,25 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
     return a.v != b.v ? a.v < b.v : a.u < b.u;
   });
   std::size_t tried = 0;
+  wide_.clear();
   for (const Feature& f : features_) {
     if (out.valid_count >= s_.max_points) break;
     ScenePoint p;
     p.left_px = Eigen::Vector2d(f.u, f.v);
     p.right_px.setConstant(std::numeric_limits<double>::quiet_NaN());
-    match(luma, f, p);
+    wide_.emplace_back();
+    match(luma, f, p, wide_.back());
     out.valid_count += p.valid();
     out.points.push_back(p);
     ++tried;
   }
+  choose_wide(out);
   const std::span<std::int64_t> ids(id_scratch_.data(), tried);
   ids_.assign(L, std::span<const Feature>(features_.data(), tried), ids);
   for (std::size_t k = 0; k < tried; ++k) out.points[k].id = ids[k];
 }
 
-void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, ScenePoint& p) {
+void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, ScenePoint& p, WideCandidate& wc) {
   const GrayView L = luma.left_view(), R = luma.right_view();
   // The feature is a pixel centre inside the domain: its ray was undistorted once (constructor).
   const std::size_t fi = static_cast<std::size_t>(f.v) * luma.width + f.u;
@@ -182,27 +189,17 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   const Eigen::Matrix2d A0 = predicted_affine(rig_, xl, m.w);
   // Where each template pixel lands in the right image for a surface facing the camera at the
   // coarse depth (exact model): near the image edges the map bends within the window.
-  {
-    const double z = 1.0 / m.w;
-    const Eigen::Vector3d Xc = rig_.R * Eigen::Vector3d(xl.x(), xl.y(), 1.0) * z + rig_.T;
-    const Eigen::Vector2d c0 = rig_.right.project(Xc);
-    const int rad = s_.lk.radius;
-    for (int dr = -rad, k = 0; dr <= rad; ++dr)
-      for (int dc = -rad; dc <= rad; ++dc, ++k) {
-        const std::size_t i = static_cast<std::size_t>(f.v + dr) * luma.width + f.u + dc;
-        const Eigen::Vector3d ray(rays_[2 * i], rays_[2 * i + 1], 1.0);
-        shape_[k] = rig_.right.project(rig_.R * ray * z + rig_.T) - c0;
-      }
-  }
+  predict_shape(f, xl, m.w, s_.lk.radius, -1, shape_.data());
   LkSettings lks = s_.lk;
   if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
-  const LkResult lk = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, R, usable_[1].data(), m.px,
-                                    A0, shape_.data(), lks);
-  if (!lk.converged || lk.zncc < s_.min_final_zncc) {
+  const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, R, usable_[1].data(),
+                                        m.px, A0, shape_.data(), lks);
+  if (!narrow.converged || narrow.zncc < s_.min_final_zncc) {
     p.status = PointStatus::refinement_failed;
-    p.zncc = lk.converged ? lk.zncc : p.zncc;
+    p.zncc = narrow.converged ? narrow.zncc : p.zncc;
     return;
   }
+  const LkResult& lk = narrow;
   p.zncc = lk.zncc;
   p.right_px = lk.px;
   // Left-right check: the right window, searched along its own curve in the left image, must come
@@ -223,11 +220,24 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
     p.status = PointStatus::left_right_mismatch;
     return;
   }
-  const Triangulated t = triangulate(rig_, p.left_px, lk.px, TriangulationMethod::refined, 1.0);
-  if (!t.ok() || !(t.X.z() > 0)) {
+  if (!triangulate_match(p.left_px, lk.px, lk.cov, p.X, p.depth_sigma_mm)) {
     p.status = PointStatus::triangulation_failed;
     return;
   }
+  p.status = PointStatus::ok;
+  const LkResult wide = widen(luma, f, xl, m.w, A0, lks, narrow, wc.hausman);
+  if (wide.converged && triangulate_match(p.left_px, wide.px, wide.cov, wc.X, wc.depth_sigma_mm)) {
+    wc.usable = true;
+    wc.right_px = wide.px;
+    wc.zncc = wide.zncc;
+  }
+}
+
+bool SparseReconstructor::triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,
+                                            const Eigen::Matrix2d& cov_px, Eigen::Vector3d& X,
+                                            double& depth_sigma_mm) const {
+  const Triangulated t = triangulate(rig_, left_px, right_px, TriangulationMethod::refined, 1.0);
+  if (!t.ok() || !(t.X.z() > 0)) return false;
   // First-order propagation through the least-squares triangulation, X = (J^T J)^-1 J^T m: the whole
   // match error is the right pixel's (the feature is a pixel centre by definition), with the LK
   // covariance of lk_affine.hpp.
@@ -235,10 +245,10 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   const Eigen::Matrix3d JtJ = J.transpose() * J;
   const Eigen::Matrix<double, 3, 4> G = JtJ.inverse() * J.transpose();
   const Eigen::Matrix<double, 3, 2> Gr = G.rightCols<2>();
-  const Eigen::Matrix3d cov = Gr * lk.cov * Gr.transpose();
-  p.X = t.X;
-  p.depth_sigma_mm = std::sqrt(cov(2, 2));
-  p.status = PointStatus::ok;
+  const Eigen::Matrix3d cov = Gr * cov_px * Gr.transpose();
+  X = t.X;
+  depth_sigma_mm = std::sqrt(cov(2, 2));
+  return true;
 }
 
 }  // namespace naneye::recon::scene

@@ -23,6 +23,9 @@ struct LkSettings {
   // neighbouring luminance pixels share raw noise. The covariance is then the sandwich
   // H^-1 (sum_j (b * SD)_j (b * SD)_j^T) H^-1 s^2 / |b|^2 instead of s^2 H^-1.
   std::array<float, 9> noise_kernel{0, 0, 0, 0, 1, 0, 0, 0, 0};
+  // px; > 0: the result also reports the SSR of the pixels farther than this from the centre
+  // (Chebyshev distance), the ring a wider window adds to a narrower one (sparse.cpp's window test).
+  int inner_radius = 0;
   static std::array<float, 9> binomial3() {
     return {1 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 4 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 1 / 16.f};
   }
@@ -34,8 +37,22 @@ struct LkResult {
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();  // the warp's linear part
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();    // px^2, covariance of px
   double zncc = 0;                                  // of the final warped window
+  // The final residual in the template's grey levels (DN^2): over the window, and over the pixels
+  // beyond LkSettings::inner_radius (0 when that is 0). Both images' noise is in it.
+  double ssr_dn2 = 0, ssr_outer_dn2 = 0;
+  // With LkSettings::inner_radius: the covariance of (this fit's px - the px of the same fit over the
+  // inner pixels only) per unit residual variance (in the normalised template's units: DN^2 divided
+  // by template_ss_dn2), px^2; and the template's sum of squared deviations, DN^2.
+  Eigen::Matrix2d diff_cov_unit = Eigen::Matrix2d::Zero();
+  double template_ss_dn2 = 0;
   int iterations = 0;
 };
+
+// Satterthwaite's (1946) factor for a sum of squares of noise filtered by `kernel` (LkSettings'
+// noise_kernel): sum over lags of the noise autocorrelation squared, sum_l rho(l)^2. A residual sum
+// over N pixels then behaves as a chi-square with N / factor degrees of freedom (1 for white noise,
+// 3.78 for the Bayer binomial).
+double noise_dof_factor(const std::array<float, 9>& kernel);
 
 // `tgx`, `tgy`: central-difference gradients of `src`. `dst_usable`: non-zero where a window of
 // radius + 1 around the pixel lies inside the target's domain; the warp must keep its centre there.
@@ -43,9 +60,11 @@ struct LkResult {
 // A0 q + start; with `shape` (one entry per template pixel, row-major), q = the pixel's predicted
 // place in the target relative to the centre (the exact model's map at the coarse depth, which an
 // affine in raw pixels cannot follow near the image edges), the start is q + start and A0 is that
-// map's Jacobian at the centre.
+// map's Jacobian at the centre. `start_linear`: the warp's linear part to start from (another
+// refinement's A, e.g. a narrower window's) instead of A0 (without `shape`) or I (with it).
 LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, int u, int v,
                        const GrayView& dst, const std::uint8_t* dst_usable, const Eigen::Vector2d& start,
-                       const Eigen::Matrix2d& A0, const Eigen::Vector2d* shape, const LkSettings& s);
+                       const Eigen::Matrix2d& A0, const Eigen::Vector2d* shape, const LkSettings& s,
+                       const Eigen::Matrix2d* start_linear = nullptr);
 
 }  // namespace naneye::recon::scene

@@ -28,7 +28,23 @@ struct SparseSettings {
   // Ambiguity: the best must leave (1 - best) <= this share of (1 - second best) (a texture that
   // repeats along the curve gives two near-equal peaks: refused instead of guessed).
   double max_ambiguity = 0.5;
-  double min_final_zncc = 0.9;   // after LK
+  double min_final_zncc = 0.9;  // after LK
+  // The wider LK window (docs/scene.md, "Sparse path" step 5), px: 13 x 13 against lk.radius's 9 x 9
+  // (2.1x the pixels: ~0.7x the disparity sigma where the texture is even). Its match replaces the
+  // narrow one only where the affine warp holds over it (sparse.cpp); 0 (or <= lk.radius): never.
+  int wide_radius = 6;
+  // Each of the wider window's three tests (its outer ring's residual against the narrow window's
+  // noise, its shift against the narrow one's, and that shift test pooled over the neighbourhood;
+  // sparse_wide.cpp) refuses this share of the features where the affine holds: the price is their
+  // ~1.4x larger sigma, against a bias the tests then miss.
+  double wide_false_reject = 0.01;
+  // px; the neighbourhood whose wider windows' shift tests are pooled (sparse_wide.cpp). A curved
+  // surface biases the wide windows on it alike, by a noncentrality of ~0.7 per feature on the
+  // height preset (its mean statistic 1.7 against 1), invisible to one feature's test; k features
+  // pooled see it at 0.7 k / sqrt(2 k) sigma, so k >~ 60 for both 1 % errors at 2.3 sigma each.
+  // ~34 features lie within 32 px; measured on height mono, rms(err/sigma) 1.55 at 32 px, 1.33 at
+  // 64, 1.27 (the narrow window's own) at 96, while the planes keep all their wider windows.
+  double wide_pool_radius_px = 96;
   double lr_tolerance_px = 1.0;  // px; right-to-left search must land this close to the feature
   int max_features = 1536;
   // The valid points a pair needs: the issue's >= 300 good points per pair, with room for a scene
@@ -94,7 +110,30 @@ class SparseReconstructor {
   void reset_ids() { ids_.reset(); }
 
  private:
-  void match(const StereoLuma& luma, const Feature& f, ScenePoint& p);
+  // The wider LK window's result for one feature tried (sparse_wide.cpp).
+  struct WideCandidate {
+    double hausman = -1;  // its shift against the narrow window's (chi-square, 2 dof); < 0: none
+    bool usable = false;  // passed its own tests and triangulated
+    Eigen::Vector2d right_px{0, 0};
+    Eigen::Vector3d X{0, 0, 0};
+    double depth_sigma_mm = 0, zncc = 0;
+  };
+  void match(const StereoLuma& luma, const Feature& f, ScenePoint& p, WideCandidate& wc);
+  bool triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,
+                         const Eigen::Matrix2d& cov_px, Eigen::Vector3d& X, double& depth_sigma_mm) const;
+  void init_wide();
+  // Each valid point takes its wider window's match where its neighbourhood's pooled shift test
+  // passes (sparse_wide.cpp).
+  void choose_wide(SparseResult& out);
+  // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
+  // right image for a surface facing the camera at inverse depth w (exact model), relative to the
+  // centre's place, row-major over the (2 rad + 1)^2 window.
+  void predict_shape(const Feature& f, const Eigen::Vector2d& xl, double w, int rad, int skip,
+                     Eigen::Vector2d* out) const;
+  // The wider window's refinement of `narrow` where its feature's window fits and it passes its own
+  // tests (sparse_wide.cpp), else not converged; `hausman`: its shift test's statistic (or -1).
+  LkResult widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
+                 const Eigen::Matrix2d& A0, const LkSettings& lks, const LkResult& narrow, double& hausman);
 
   StereoRig rig_;
   SparseSettings s_;
@@ -102,6 +141,12 @@ class SparseReconstructor {
   Eigen::Vector3d T_lr_, T_rl_;
   std::vector<std::uint8_t> usable_[2];         // LK window radius + 1
   std::vector<std::uint8_t> usable_search_[2];  // coarse window
+  std::vector<std::uint8_t> usable_wide_[2];    // the wider LK window (left: radius, right: + 1)
+  double wide_z_ = 0;                           // upper normal quantile of wide_false_reject
+  double wide_chi1_ = 0;                        // chi-square(1) upper quantile of wide_false_reject
+  double wide_kappa_[2] = {1, 1};               // noise_dof_factor: mono, Bayer
+  std::vector<WideCandidate> wide_;             // per feature tried
+  std::vector<int> cell_point_;                 // per feature cell: its point's index, or -1
   std::vector<std::uint8_t> noise_mask_;        // left: 3x3 neighbourhood inside usable_search_[0]
   StereoLuma luma_;
   FeatureDetector detector_;
@@ -109,10 +154,11 @@ class SparseReconstructor {
   FeatureIds ids_;
   std::vector<std::int64_t> id_scratch_;
   EpipolarCurve curve_, back_curve_;
-  std::vector<double> rays_;            // left pixel centres' normalized rays (x, y)
-  std::vector<float> inv_norm_[2];      // per pixel: 1 / |window - mean| of the coarse window
-  std::vector<double> norm_scratch_;    // scratch of window_inverse_norms
-  std::vector<Eigen::Vector2d> shape_;  // the LK template's predicted places in the right image
+  std::vector<double> rays_;                 // left pixel centres' normalized rays (x, y)
+  std::vector<float> inv_norm_[2];           // per pixel: 1 / |window - mean| of the coarse window
+  std::vector<double> norm_scratch_;         // scratch of window_inverse_norms
+  std::vector<Eigen::Vector2d> shape_;       // the LK template's predicted places in the right image
+  std::vector<Eigen::Vector2d> shape_wide_;  // the same for the wider window
 };
 
 }  // namespace naneye::recon::scene

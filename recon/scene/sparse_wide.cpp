@@ -1,0 +1,149 @@
+// The sparse path's wider LK window (sparse.hpp, SparseSettings::wide_radius): a wider window
+// averages more noise, but the affine warp (the surface's tilt; Baker & Matthews 2004's IC-LK,
+// lk_affine.hpp) must hold over all of it. On a curved surface its misfit is a bias the sigma (noise
+// only) leaves out: at 13 x 13 instead of 9 x 9 the height preset's rms(err/sigma) went 1.27 -> 2.12.
+// So the wider window's match replaces the narrow one's only where the data cannot tell their models
+// apart:
+// 1. Per feature, its outer ring (the pixels the narrow window lacks) must fit as well as the narrow
+//    window: the ring's residual variance over the narrow window's,
+//    F = (SSR_ring / E_ring) / (SSR_n / (N_n - 8)), E_ring = N_ring (N_w - 8) / N_w the ring's expected
+//    share of the wide fit's N_w - 8 residual degrees of freedom (8 parameters spread evenly), against
+//    the F distribution with (E_ring, N_n - 8) degrees of freedom, each divided by Satterthwaite's
+//    factor for the noise's correlation (noise_dof_factor; the two sums are over disjoint pixels,
+//    independent up to the noise kernel's one-pixel reach), in Paulson's (1942) normal form
+//    z = ((1 - c2) F^(1/3) - (1 - c1)) / sqrt(c2 F^(2/3) + c1), c = 2 / (9 nu). This catches a
+//    gross misfit in the ring (an occluding edge, another surface).
+// 2. Per feature, its shift along the epipolar curve must agree with the narrow one's (Hausman
+//    1978): nested estimates on shared pixels, so d = px_w - px_n is not the sum of their noises;
+//    linearised, d = sum_k g_k e_k over the residuals, and its covariance is lk_affine's sandwich
+//    over g (LkResult::diff_cov_unit; for white noise Sigma_n - Sigma_w, Hausman's form), at the
+//    narrow window's residual variance SSR_n / (N_n - 8), the one its sigma uses. Only the component
+//    along the curve moves the depth and carries a surface's misfit (a disparity error); across it is
+//    noise alone and would dilute the test: H = (e . d)^2 / (e^T V e), chi-square(1) under the model.
+// 3. Pooled over the neighbourhood (wide_pool_radius_px): a curved surface biases the wide windows
+//    of neighbouring features alike, by ~0.7 sd of one feature's test on the height preset (mean H
+//    1.7 there, 0.9-1.0 on the planes), which one feature's test cannot see. The sum of H over the
+//    k features within the radius is chi-square(k) under the model (disjoint noise up to their
+//    windows' small overlap): its upper quantile by Wilson-Hilferty,
+//    chi2_nu / nu ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
+// Measured (docs/scene.md): 13 x 13 everywhere, height rms(err/sigma) 2.12; with tests 1 and 2
+// alone, 1.93; with 3, 1.27, the narrow window's own, while the planes keep ~99 % of their wider
+// windows (plane-far depth error 0.57 -> 0.41 % mono).
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+#include "naneye/recon/corners/noise.hpp"
+#include "naneye/recon/scene/sparse.hpp"
+
+namespace naneye::recon::scene {
+
+void SparseReconstructor::init_wide() {
+  wide_z_ = upper_normal_quantile(s_.wide_false_reject);
+  // chi-square(1)'s upper quantile: the square of the normal's two-sided one.
+  wide_chi1_ = std::pow(upper_normal_quantile(s_.wide_false_reject / 2), 2);
+  wide_kappa_[0] = noise_dof_factor(LkSettings{}.noise_kernel);
+  wide_kappa_[1] = noise_dof_factor(LkSettings::binomial3());
+  const int wide = std::max(s_.wide_radius, s_.lk.radius), side = 2 * wide + 1;
+  shape_wide_.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
+  wide_.reserve(static_cast<std::size_t>(s_.max_features));
+  const int cell = s_.features.cell_px;
+  const int gw = (rig_.left.width() + cell - 1) / cell, gh = (rig_.left.height() + cell - 1) / cell;
+  cell_point_.assign(static_cast<std::size_t>(gw) * gh, -1);
+}
+
+void SparseReconstructor::predict_shape(const Feature& f, const Eigen::Vector2d& xl, double w, int rad,
+                                        int skip, Eigen::Vector2d* out) const {
+  const double z = 1.0 / w;
+  const Eigen::Vector3d Xc = rig_.R * Eigen::Vector3d(xl.x(), xl.y(), 1.0) * z + rig_.T;
+  const Eigen::Vector2d c0 = rig_.right.project(Xc);
+  for (int dr = -rad, k = 0; dr <= rad; ++dr)
+    for (int dc = -rad; dc <= rad; ++dc, ++k) {
+      if (std::max(std::abs(dr), std::abs(dc)) <= skip) continue;
+      const std::size_t i = static_cast<std::size_t>(f.v + dr) * luma_.width + f.u + dc;
+      const Eigen::Vector3d ray(rays_[2 * i], rays_[2 * i + 1], 1.0);
+      out[k] = rig_.right.project(rig_.R * ray * z + rig_.T) - c0;
+    }
+}
+
+LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
+                                    double w, const Eigen::Matrix2d& A0, const LkSettings& lks,
+                                    const LkResult& narrow, double& hausman) {
+  hausman = -1;
+  const int rn = s_.lk.radius, rw = s_.wide_radius;
+  if (rw <= rn || !usable_wide_[0][static_cast<std::size_t>(f.v) * luma.width + f.u]) return {};
+  const int sn = 2 * rn + 1, sw = 2 * rw + 1;
+  for (int dr = -rn; dr <= rn; ++dr)
+    for (int dc = -rn; dc <= rn; ++dc)
+      shape_wide_[static_cast<std::size_t>((dr + rw) * sw + dc + rw)] =
+          shape_[static_cast<std::size_t>((dr + rn) * sn + dc + rn)];
+  predict_shape(f, xl, w, rw, rn, shape_wide_.data());
+  LkSettings wl = lks;
+  wl.radius = rw;
+  wl.inner_radius = rn;
+  const LkResult wide =
+      refine_affine(luma.left_view(), detector_.gx(), detector_.gy(), f.u, f.v, luma.right_view(),
+                    usable_wide_[1].data(), narrow.px, A0, shape_wide_.data(), wl, &narrow.A);
+  if (!wide.converged || wide.zncc < s_.min_final_zncc || !(narrow.ssr_dn2 > 0)) return {};
+  const double nn = sn * sn, nw = sw * sw, e_ring = (nw - nn) * (nw - 8) / nw, dof_n = nn - 8;
+  if (!(dof_n > 0 && e_ring > 0)) return {};
+  // The difference's covariance at the narrow window's residual variance (the wide one's would be
+  // inflated by the very misfit the test looks for).
+  const Eigen::Matrix2d V = wide.diff_cov_unit * (narrow.ssr_dn2 / dof_n / wide.template_ss_dn2);
+  if (!(V.trace() > 0 && V.determinant() > 0)) return {};
+  // Only the shift along the epipolar curve moves the depth, and a curved surface's misfit lies there
+  // (it is a disparity error); across the curve is noise alone, which would dilute the test.
+  // The curve's direction at the match: the right images of the ray at +-1 % of its inverse depth
+  // (a step of ~0.1-1 px, short against the curve's bending).
+  const Eigen::Vector3d ray(xl.x(), xl.y(), 1.0);
+  const Eigen::Vector2d e = (rig_.right.project(rig_.R * ray / (w * 1.01) + rig_.T) -
+                             rig_.right.project(rig_.R * ray / (w * 0.99) + rig_.T))
+                                .normalized();
+  const double de = e.dot(wide.px - narrow.px), ve = e.dot(V * e);
+  hausman = de * de / ve;
+  const double kappa = wide_kappa_[luma.bayer ? 1 : 0];
+  const double F = (wide.ssr_outer_dn2 / e_ring) / (narrow.ssr_dn2 / dof_n);
+  const double c1 = 2 / (9 * e_ring / kappa), c2 = 2 / (9 * dof_n / kappa);
+  const double z = ((1 - c2) * std::cbrt(F) - (1 - c1)) / std::sqrt(c2 * std::cbrt(F * F) + c1);
+  if (z > wide_z_ || hausman > wide_chi1_) return {};
+  return wide;
+}
+
+void SparseReconstructor::choose_wide(SparseResult& out) {
+  const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
+  const int gh = static_cast<int>(cell_point_.size()) / gw;
+  std::fill(cell_point_.begin(), cell_point_.end(), -1);
+  for (std::size_t k = 0; k < wide_.size(); ++k)
+    if (wide_[k].hausman >= 0) {
+      const auto& q = out.points[k].left_px;
+      cell_point_[static_cast<std::size_t>(static_cast<int>(q.y()) / cell * gw +
+                                           static_cast<int>(q.x()) / cell)] = static_cast<int>(k);
+    }
+  const double r2 = s_.wide_pool_radius_px * s_.wide_pool_radius_px;
+  const int reach = static_cast<int>(std::ceil(s_.wide_pool_radius_px / cell));
+  for (std::size_t k = 0; k < wide_.size(); ++k) {
+    ScenePoint& p = out.points[k];
+    const WideCandidate& wc = wide_[k];
+    if (!p.valid() || !wc.usable) continue;
+    const int cx = static_cast<int>(p.left_px.x()) / cell, cy = static_cast<int>(p.left_px.y()) / cell;
+    double sum = 0;
+    int count = 0;
+    for (int y = std::max(0, cy - reach); y <= std::min(gh - 1, cy + reach); ++y)
+      for (int x = std::max(0, cx - reach); x <= std::min(gw - 1, cx + reach); ++x) {
+        const int j = cell_point_[static_cast<std::size_t>(y * gw + x)];
+        if (j < 0 || (out.points[static_cast<std::size_t>(j)].left_px - p.left_px).squaredNorm() > r2)
+          continue;
+        sum += wide_[static_cast<std::size_t>(j)].hausman;
+        ++count;
+      }
+    const double nu = count, c = 2 / (9 * nu);
+    const double bound = nu * std::pow(1 - c + wide_z_ * std::sqrt(c), 3);
+    if (sum > bound) continue;
+    p.right_px = wc.right_px;
+    p.X = wc.X;
+    p.depth_sigma_mm = wc.depth_sigma_mm;
+    p.zncc = wc.zncc;
+  }
+}
+
+}  // namespace naneye::recon::scene
