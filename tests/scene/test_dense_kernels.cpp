@@ -48,25 +48,27 @@ struct SpanPlane {
 
 TEST(DenseKernels, BoxSumGivesTheScalarSumsBits) {
   std::mt19937 rng(3);
-  for (int trial = 0; trial < 20; ++trial) {
+  for (int trial = 0; trial < 30; ++trial) {
     const SpanPlane p(rng);
+    // 3 and 6 have their own unrolled kernels (the matcher's radius and twice it), 2 the general one.
+    const int r = trial % 3 == 0 ? 2 : trial % 3 == 1 ? 3 : 6;
     for (const bool avx2 : dense_kernel_builds()) {
       std::vector<float> out(p.v.size(), -1.f), tmp(static_cast<std::size_t>(p.w));
-      dense_simd::box_sum(avx2, p.v.data(), out.data(), tmp.data(), p.spans(), 3);
+      dense_simd::box_sum(avx2, p.v.data(), out.data(), tmp.data(), p.spans(), r);
       for (int y = 0; y < p.h; ++y)
         for (int x = p.lo[static_cast<std::size_t>(y)]; x < p.hi[static_cast<std::size_t>(y)]; ++x) {
           // Rows top to bottom into each column, then the columns left to right.
           float s = 0;
           bool first = true;
-          for (int k = std::max(0, x - 3); k <= std::min(p.w - 1, x + 3); ++k) {
-            float col = p.at(k, std::max(0, y - 3));
-            for (int yy = std::max(0, y - 3) + 1; yy <= std::min(p.h - 1, y + 3); ++yy) col += p.at(k, yy);
+          for (int k = std::max(0, x - r); k <= std::min(p.w - 1, x + r); ++k) {
+            float col = p.at(k, std::max(0, y - r));
+            for (int yy = std::max(0, y - r) + 1; yy <= std::min(p.h - 1, y + r); ++yy) col += p.at(k, yy);
             // The inner columns start from the first column's sum, the edges from 0 (both exact).
             s = first ? col : s + col;
             first = false;
           }
           ASSERT_EQ(out[static_cast<std::size_t>(y) * p.w + static_cast<std::size_t>(x)], s)
-              << (avx2 ? "avx2 " : "sse ") << x << ", " << y;
+              << (avx2 ? "avx2 " : "sse ") << "r " << r << " at " << x << ", " << y;
         }
     }
   }
