@@ -84,7 +84,7 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     gather(left, right, valid_right, it + 1 == s_.iterations);
     // Only the last iteration's fit is read after the loop (validate(), correlation()): a window that
     // survives it is refitted there, one that fails it has no disparity. The earlier iterations
-    // keep only the step (two of the six divisions saved).
+    // keep only the step.
     const bool last = it + 1 == s_.iterations;
     if (last) reference_detail();
     sp.each([&](std::size_t i) {
@@ -106,15 +106,24 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
         d_[i] = kNoMatch;
         return;
       }
-      const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
-      if (last) {
-        const double Sll = S[9 * n + i] - sl * sl * inv;
-        a_[i] = static_cast<float>(a);
-        c_[i] = static_cast<float>(c);
-        b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
-        s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
-        z_[i] = static_cast<float>(Sww / det);
+      const double na = Sgg * Swl - Swg * Sgl, nc = Swg * Swl - Sww * Sgl;  // a, c times det
+      if (!last) {
+        // The earlier iterations keep only the step c / a = nc / na (det > 0 cancels; a > 0 iff
+        // na > 0): one double division instead of three. The quotient may differ from (nc / det) /
+        // (na / det) in the last bit of the double, not after its rounding to float (the maps are
+        // bit-identical on every dense test render).
+        if (!(na > 0)) return;  // anti-correlated: validate() refuses it
+        mstep[i] = static_cast<float>(std::clamp(nc / na, -0.5, 0.5));
+        msolved[i] = 1;
+        return;
       }
+      const double a = na / det, c = nc / det;
+      const double Sll = S[9 * n + i] - sl * sl * inv;
+      a_[i] = static_cast<float>(a);
+      c_[i] = static_cast<float>(c);
+      b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
+      s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
+      z_[i] = static_cast<float>(Sww / det);
       if (!(a > 0)) return;  // anti-correlated: validate() refuses it
       // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
       mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
