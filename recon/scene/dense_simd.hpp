@@ -32,6 +32,12 @@ void box_sum(bool avx2, const float* in, float* out, float* tmp, const Spans& sp
 // image and the spans.
 void filter_lags(bool avx2, const float* z, float* out, const float* rho, int lag, const Spans& sp);
 
+// The residual's autocorrelation sums (RectifiedMatcher::correlation): acc[(dy + 3) * 7 + dx + 3]
+// = sum of e_p * e_(p + (dx, dy)) over lags [-3, 3]^2 and the pixels p of every other row and column
+// from (3, 3) on, at least 3 from the far borders, with e_p != 0; each product in float, summed in
+// double in the pixels' order (the plain loop's bits). e: w x h.
+void lag_products(bool avx2, const float* e, int w, int h, double acc[49]);
+
 // One rectified row of the sub-pixel step's per-pixel products (RectifiedMatcher::gather): the right
 // row sampled at x - d by Keys' cubic (W) and its derivative (G), the left pixel (l), all less mu,
 // and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1 where every tap lies inside the

@@ -270,16 +270,10 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     e[i] = use ? a_[i] * ch[n + i] + b_[i] - c_[i] * ch[3 * n + i] - ch[2 * n + i] : 0.f;
   }
   constexpr int kSide = 2 * kLag + 1;
-  double acc[kSide][kSide] = {};
+  double acc[kSide][kSide];
   // Every other row and column: ~15 000 products per lag on a pair, the estimate's scatter ~0.01.
-  for (int y = kLag; y < h_ - kLag; y += 2)
-    for (int x = kLag; x < w_ - kLag; x += 2) {
-      const float ei = e[static_cast<std::size_t>(y) * w_ + x];
-      if (ei == 0) continue;
-      for (int dy = -kLag; dy <= kLag; ++dy)
-        for (int dx = -kLag; dx <= kLag; ++dx)
-          acc[dy + kLag][dx + kLag] += ei * e[static_cast<std::size_t>(y + dy) * w_ + x + dx];
-    }
+  static_assert(kLag == 3, "dense_simd::lag_products sums lags [-3, 3]^2");
+  dense_simd::lag_products(avx2_, e, w_, h_, &acc[0][0]);
   const double e0 = acc[kLag][kLag] > 0 ? acc[kLag][kLag] : 1.0;
   for (int k = 0; k < kSide * kSide; ++k)
     rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / kSide][k % kSide] / e0);

@@ -222,6 +222,33 @@ TEST(DenseKernels, StepRowGivesTheScalarLoopsBits) {
   }
 }
 
+// The residual's lag sums against the plain loop (the matcher's before 2026-12-04 night), on odd
+// sizes whose last row's last pixel makes the 8-float block leave the plane.
+TEST(DenseKernels, LagProductsGiveThePlainLoopsBits) {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> u(-3.f, 3.f);
+  for (const int w : {11, 16, 37}) {
+    const int h = w - 2;
+    std::vector<float> e(static_cast<std::size_t>(w) * h);
+    for (std::size_t i = 0; i < e.size(); ++i) e[i] = i % 5 == 2 ? 0.f : u(rng);
+    double want[7][7] = {};
+    for (int y = 3; y < h - 3; y += 2)
+      for (int x = 3; x < w - 3; x += 2) {
+        const float ei = e[static_cast<std::size_t>(y) * w + x];
+        if (ei == 0) continue;
+        for (int dy = -3; dy <= 3; ++dy)
+          for (int dx = -3; dx <= 3; ++dx)
+            want[dy + 3][dx + 3] += ei * e[static_cast<std::size_t>(y + dy) * w + x + dx];
+      }
+    for (const bool avx2 : dense_kernel_builds()) {
+      double acc[49];
+      dense_simd::lag_products(avx2, e.data(), w, h, acc);
+      for (int k = 0; k < 49; ++k)
+        ASSERT_EQ(acc[k], want[k / 7][k % 7]) << (avx2 ? "avx2 " : "sse ") << w << " " << k;
+    }
+  }
+}
+
 TEST(DenseKernels, KthSmallestIsNthElementsValue) {
   std::mt19937 rng(6);
   SelectHistogram hist;
