@@ -32,6 +32,12 @@ void box_sum(bool avx2, const float* in, float* out, float* tmp, const Spans& sp
 // image and the spans.
 void filter_lags(bool avx2, const float* z, float* out, const float* rho, int lag, const Spans& sp);
 
+// The residual's autocorrelation sums (RectifiedMatcher::correlation): acc[(dy + 3) * 7 + dx + 3]
+// = sum of e_p * e_(p + (dx, dy)) over lags [-3, 3]^2 and the pixels p of every other row and column
+// from (3, 3) on, at least 3 from the far borders, with e_p != 0; each product in float, summed in
+// double in the pixels' order (the plain loop's bits). e: w x h.
+void lag_products(bool avx2, const float* e, int w, int h, double acc[49]);
+
 // One rectified row of the sub-pixel step's per-pixel products (RectifiedMatcher::gather): the right
 // row sampled at x - d by Keys' cubic (W) and its derivative (G), the left pixel (l), all less mu,
 // and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1 where every tap lies inside the
@@ -47,5 +53,20 @@ struct GatherRow {
   float mu;        // the level subtracted from both images
 };
 void gather_row(bool avx2, const GatherRow& g);
+
+// One row of an earlier Gauss-Newton iteration's step (RectifiedMatcher::refine), in float, over
+// columns [lo, hi): from the window sums N, W, L, G, WW, GG, WG, WL, GL (s[0..8] at this row) the
+// centred 2 x 2 system, its step nc / na clamped to half a pixel. Per pixel: no disparity (d NaN),
+// no data (m == 0) or fewer than 4 window pixels, or det <= 0: d = NaN, out = solved = 0; na <= 0
+// (anti-correlated): out = solved = 0; else out = d + step, solved = 1.
+struct StepRow {
+  const float* s[9];
+  const float* m;  // the gather's mask channel
+  float* d;        // reference disparities (in; NaN where refused)
+  float* out;      // d + step where solved, else 0
+  float* solved;   // 1 where solved, else 0
+  int lo, hi;
+};
+void step_row(bool avx2, const StepRow& r);
 
 }  // namespace naneye::recon::scene::dense_simd

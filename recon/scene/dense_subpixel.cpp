@@ -83,43 +83,61 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
   for (int it = 0; it < s_.iterations; ++it) {
     gather(left, right, valid_right, it + 1 == s_.iterations);
     // Only the last iteration's fit is read after the loop (validate(), correlation()): a window that
-    // survives it is refitted there, one that fails it has no disparity. The earlier iterations
-    // keep only the step (two of the six divisions saved).
+    // survives it is refitted there, one that fails it has no disparity.
     const bool last = it + 1 == s_.iterations;
-    if (last) reference_detail();
-    sp.each([&](std::size_t i) {
-      const float N = S[i];
-      if (last) n_[i] = N;
-      mstep[i] = 0;
-      msolved[i] = 0;
-      if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
-        d_[i] = kNoMatch;
-        return;
+    if (!last) {
+      // The earlier iterations keep only the step, in float on whole vectors (dense_simd::step_row):
+      // the window sums are float box sums already, whose rounding (~1e-7 of the sums of squares,
+      // ~2r+1 additions per pass) the centring in double does not undo; the step only moves the
+      // reference, which the window mean then smooths and the last iteration's fit, in double,
+      // corrects. The scalar double loop cost ~1/10 of the dense path's time.
+      dense_simd::StepRow r{};
+      for (int y = 0; y < h_; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y) * w_;
+        for (int k = 0; k < 9; ++k) r.s[k] = S + static_cast<std::size_t>(k) * n + row;
+        r.m = chan_.data() + row;
+        r.d = d_.data() + row;
+        r.out = mstep + row;
+        r.solved = msolved + row;
+        r.lo = span_lo_[static_cast<std::size_t>(y)];
+        r.hi = span_hi_[static_cast<std::size_t>(y)];
+        dense_simd::step_row(avx2_, r);
       }
-      const double inv = 1.0 / N;
-      const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
-      const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
-      const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
-      const double Sgl = S[8 * n + i] - sgr * sl * inv;
-      const double det = Sww * Sgg - Swg * Swg;
-      if (!(det > 0)) {
-        d_[i] = kNoMatch;
-        return;
-      }
-      const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
-      if (last) {
+    } else {
+      reference_detail();
+      // The last fit in double: its gain, offset, residual and variance are read after the loop.
+      sp.each([&](std::size_t i) {
+        const float N = S[i];
+        n_[i] = N;
+        mstep[i] = 0;
+        msolved[i] = 0;
+        if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
+          d_[i] = kNoMatch;
+          return;
+        }
+        const double inv = 1.0 / N;
+        const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
+        const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
+        const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
+        const double Sgl = S[8 * n + i] - sgr * sl * inv;
+        const double det = Sww * Sgg - Swg * Swg;
+        if (!(det > 0)) {
+          d_[i] = kNoMatch;
+          return;
+        }
+        const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
         const double Sll = S[9 * n + i] - sl * sl * inv;
         a_[i] = static_cast<float>(a);
         c_[i] = static_cast<float>(c);
         b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
         s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
         z_[i] = static_cast<float>(Sww / det);
-      }
-      if (!(a > 0)) return;  // anti-correlated: validate() refuses it
-      // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
-      mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
-      msolved[i] = 1;
-    });
+        if (!(a > 0)) return;  // anti-correlated: validate() refuses it
+        // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
+        mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
+        msolved[i] = 1;
+      });
+    }
     // The window's shape is the reference field d_ (each pixel warped by its own reference
     // disparity: slanted surfaces keep their shape), its correction the window's common step. The
     // reference becomes the window mean of the corrected disparities, never a pixel's own: fed
@@ -145,7 +163,6 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       });
       break;
     }
-    sp.each([&](std::size_t i) { mstep[i] = msolved[i] > 0 ? d_[i] + mstep[i] : 0.f; });
     dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
     dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
     sp.each([&](std::size_t i) {
@@ -253,16 +270,10 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
     e[i] = use ? a_[i] * ch[n + i] + b_[i] - c_[i] * ch[3 * n + i] - ch[2 * n + i] : 0.f;
   }
   constexpr int kSide = 2 * kLag + 1;
-  double acc[kSide][kSide] = {};
+  double acc[kSide][kSide];
   // Every other row and column: ~15 000 products per lag on a pair, the estimate's scatter ~0.01.
-  for (int y = kLag; y < h_ - kLag; y += 2)
-    for (int x = kLag; x < w_ - kLag; x += 2) {
-      const float ei = e[static_cast<std::size_t>(y) * w_ + x];
-      if (ei == 0) continue;
-      for (int dy = -kLag; dy <= kLag; ++dy)
-        for (int dx = -kLag; dx <= kLag; ++dx)
-          acc[dy + kLag][dx + kLag] += ei * e[static_cast<std::size_t>(y + dy) * w_ + x + dx];
-    }
+  static_assert(kLag == 3, "dense_simd::lag_products sums lags [-3, 3]^2");
+  dense_simd::lag_products(avx2_, e, w_, h_, &acc[0][0]);
   const double e0 = acc[kLag][kLag] > 0 ? acc[kLag][kLag] : 1.0;
   for (int k = 0; k < kSide * kSide; ++k)
     rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / kSide][k % kSide] / e0);

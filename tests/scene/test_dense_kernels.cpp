@@ -48,25 +48,27 @@ struct SpanPlane {
 
 TEST(DenseKernels, BoxSumGivesTheScalarSumsBits) {
   std::mt19937 rng(3);
-  for (int trial = 0; trial < 20; ++trial) {
+  for (int trial = 0; trial < 30; ++trial) {
     const SpanPlane p(rng);
+    // 3 and 6 have their own unrolled kernels (the matcher's radius and twice it), 2 the general one.
+    const int r = trial % 3 == 0 ? 2 : trial % 3 == 1 ? 3 : 6;
     for (const bool avx2 : dense_kernel_builds()) {
       std::vector<float> out(p.v.size(), -1.f), tmp(static_cast<std::size_t>(p.w));
-      dense_simd::box_sum(avx2, p.v.data(), out.data(), tmp.data(), p.spans(), 3);
+      dense_simd::box_sum(avx2, p.v.data(), out.data(), tmp.data(), p.spans(), r);
       for (int y = 0; y < p.h; ++y)
         for (int x = p.lo[static_cast<std::size_t>(y)]; x < p.hi[static_cast<std::size_t>(y)]; ++x) {
           // Rows top to bottom into each column, then the columns left to right.
           float s = 0;
           bool first = true;
-          for (int k = std::max(0, x - 3); k <= std::min(p.w - 1, x + 3); ++k) {
-            float col = p.at(k, std::max(0, y - 3));
-            for (int yy = std::max(0, y - 3) + 1; yy <= std::min(p.h - 1, y + 3); ++yy) col += p.at(k, yy);
+          for (int k = std::max(0, x - r); k <= std::min(p.w - 1, x + r); ++k) {
+            float col = p.at(k, std::max(0, y - r));
+            for (int yy = std::max(0, y - r) + 1; yy <= std::min(p.h - 1, y + r); ++yy) col += p.at(k, yy);
             // The inner columns start from the first column's sum, the edges from 0 (both exact).
             s = first ? col : s + col;
             first = false;
           }
           ASSERT_EQ(out[static_cast<std::size_t>(y) * p.w + static_cast<std::size_t>(x)], s)
-              << (avx2 ? "avx2 " : "sse ") << x << ", " << y;
+              << (avx2 ? "avx2 " : "sse ") << "r " << r << " at " << x << ", " << y;
         }
     }
   }
@@ -106,6 +108,8 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
     left[x] = val(rng);
     right[x] = val(rng);
     d[x] = x % 11 == 5 ? NAN : disp(rng);
+    // Infinite references fail the AVX2 build's range test on the floor, as isfinite does.
+    if (x % 13 == 7) d[x] = x % 2 ? INFINITY : -INFINITY;
     valid[x] = x % 17 != 9;
   }
   for (int x = 0; x < w; ++x)
@@ -150,6 +154,98 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
     }
     EXPECT_EQ(ch[0 * w + 2], -1.f);  // outside [lo, hi): untouched
     EXPECT_EQ(ch[0 * w + w - 1], -1.f);
+  }
+}
+
+// The earlier iterations' step (RectifiedMatcher::refine) against the plain float loop: every
+// refusal (no disparity, an infinite one, no data, N < 4, det <= 0, na <= 0), clamped and free
+// steps, odd spans (the vector tail).
+TEST(DenseKernels, StepRowGivesTheScalarLoopsBits) {
+  std::mt19937 rng(9);
+  constexpr int w = 45;
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<float> S(9 * w), m(w), d(w);
+    for (int x = 0; x < w; ++x) {
+      const float N = static_cast<float>(rng() % 50), mw = 40 * u(rng), mg = 30 * u(rng), ml = 40 * u(rng);
+      S[0 * w + x] = N;
+      S[1 * w + x] = N * mw;
+      S[2 * w + x] = N * ml;
+      S[3 * w + x] = N * mg;
+      // Centred sums of squares around 100-900, cross terms that sometimes make det <= 0.
+      const float ww = 500 + 400 * u(rng), gg = 500 + 400 * u(rng), wg = 700 * u(rng);
+      S[4 * w + x] = ww + N * mw * mw;
+      S[5 * w + x] = gg + N * mg * mg;
+      S[6 * w + x] = wg + N * mw * mg;
+      S[7 * w + x] = 300 * u(rng) + N * mw * ml;
+      S[8 * w + x] = 300 * u(rng) + N * mg * ml;
+      m[x] = x % 9 == 4 ? 0.f : 1.f;
+      d[x] = x % 11 == 3 ? NAN : x % 13 == 6 ? INFINITY : 20 * u(rng);
+    }
+    const int lo = static_cast<int>(rng() % 10), hi = lo + static_cast<int>(rng() % (w - lo + 1));
+    for (const bool avx2 : dense_kernel_builds()) {
+      std::vector<float> dk = d, out(w, -1.f), solved(w, -1.f);
+      dense_simd::StepRow r{};
+      for (int k = 0; k < 9; ++k) r.s[k] = S.data() + k * w;
+      r.m = m.data();
+      r.d = dk.data();
+      r.out = out.data();
+      r.solved = solved.data();
+      r.lo = lo;
+      r.hi = hi;
+      dense_simd::step_row(avx2, r);
+      for (int x = 0; x < w; ++x) {
+        float want_d = d[x], want_out = 0, want_solved = 0;
+        const float* s = &S[x];
+        const float N = s[0], sw = s[w], sl = s[2 * w], sg = s[3 * w], inv = 1.f / N;
+        const float Sww = s[4 * w] - sw * sw * inv, Sgg = s[5 * w] - sg * sg * inv;
+        const float Swg = s[6 * w] - sw * sg * inv, Swl = s[7 * w] - sw * sl * inv;
+        const float Sgl = s[8 * w] - sg * sl * inv;
+        const float det = Sww * Sgg - Swg * Swg, na = Sgg * Swl - Swg * Sgl, nc = Swg * Swl - Sww * Sgl;
+        if (x < lo || x >= hi) {
+          want_out = want_solved = -1;  // outside the span: untouched
+        } else if (!std::isfinite(d[x]) || m[x] == 0 || N < 4 || !(det > 0)) {
+          want_d = NAN;
+        } else if (na > 0) {
+          want_out = d[x] + std::clamp(nc / na, -0.5f, 0.5f);
+          want_solved = 1;
+        }
+        const char* b = avx2 ? "avx2 " : "sse ";
+        ASSERT_EQ(out[x], want_out) << b << x;
+        ASSERT_EQ(solved[x], want_solved) << b << x;
+        if (std::isnan(want_d))
+          ASSERT_TRUE(std::isnan(dk[x])) << b << x;
+        else
+          ASSERT_EQ(dk[x], want_d) << b << x;
+      }
+    }
+  }
+}
+
+// The residual's lag sums against the plain loop (the matcher's before 2026-12-04 night), on odd
+// sizes whose last row's last pixel makes the 8-float block leave the plane.
+TEST(DenseKernels, LagProductsGiveThePlainLoopsBits) {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> u(-3.f, 3.f);
+  for (const int w : {11, 16, 37}) {
+    const int h = w - 2;
+    std::vector<float> e(static_cast<std::size_t>(w) * h);
+    for (std::size_t i = 0; i < e.size(); ++i) e[i] = i % 5 == 2 ? 0.f : u(rng);
+    double want[7][7] = {};
+    for (int y = 3; y < h - 3; y += 2)
+      for (int x = 3; x < w - 3; x += 2) {
+        const float ei = e[static_cast<std::size_t>(y) * w + x];
+        if (ei == 0) continue;
+        for (int dy = -3; dy <= 3; ++dy)
+          for (int dx = -3; dx <= 3; ++dx)
+            want[dy + 3][dx + 3] += ei * e[static_cast<std::size_t>(y + dy) * w + x + dx];
+      }
+    for (const bool avx2 : dense_kernel_builds()) {
+      double acc[49];
+      dense_simd::lag_products(avx2, e.data(), w, h, acc);
+      for (int k = 0; k < 49; ++k)
+        ASSERT_EQ(acc[k], want[k / 7][k % 7]) << (avx2 ? "avx2 " : "sse ") << w << " " << k;
+    }
   }
 }
 
