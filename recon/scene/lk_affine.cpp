@@ -12,6 +12,27 @@
 
 namespace naneye::recon::scene {
 namespace {
+
+// sum_p (b * v)_p (b * v)_p^T over the window grown by one pixel (the kernel's reach), v zero outside
+// the side x side window: the noise of a weighted sum of v under the pair's 3 x 3 noise kernel b.
+template <int D, std::size_t N>
+Eigen::Matrix<double, D, D> kernel_outer(const std::array<float, 9>& b,
+                                         const std::array<Eigen::Matrix<double, D, 1>, N>& v, int side) {
+  Eigen::Matrix<double, D, D> out = Eigen::Matrix<double, D, D>::Zero();
+  for (int r = -1; r <= side; ++r)
+    for (int c = -1; c <= side; ++c) {
+      Eigen::Matrix<double, D, 1> f = Eigen::Matrix<double, D, 1>::Zero();
+      for (int i = -1; i <= 1; ++i)
+        for (int j = -1; j <= 1; ++j) {
+          const int rr = r + i, cc = c + j;
+          if (rr < 0 || cc < 0 || rr >= side || cc >= side) continue;
+          f += double(b[static_cast<std::size_t>((i + 1) * 3 + j + 1)]) *
+               v[static_cast<std::size_t>(rr * side + cc)];
+        }
+      out.noalias() += f * f.transpose();
+    }
+  return out;
+}
 constexpr int kMaxN = 15 * 15;
 
 }  // namespace
@@ -172,19 +193,9 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   double b2 = 0;
   for (float x : b) b2 += double(x) * x;
   const bool white = b == LkSettings{}.noise_kernel;
-  Eigen::Matrix<double, 6, 6> B = Eigen::Matrix<double, 6, 6>::Zero();  // white: B = H, not needed
-  // (b * SD) over the window grown by one pixel (the kernel's reach), zero outside the window.
-  for (int r = -1; !white && r <= side; ++r)
-    for (int c = -1; c <= side; ++c) {
-      Eigen::Matrix<double, 6, 1> f = Eigen::Matrix<double, 6, 1>::Zero();
-      for (int i = -1; i <= 1; ++i)
-        for (int j = -1; j <= 1; ++j) {
-          const int rr = r + i, cc = c + j;
-          if (rr < 0 || cc < 0 || rr >= side || cc >= side) continue;
-          f += double(b[(i + 1) * 3 + j + 1]) * sd[rr * side + cc];
-        }
-      B.noalias() += f * f.transpose();
-    }
+  // (b * SD) over the window grown by one pixel; white: B = H, not needed.
+  const Eigen::Matrix<double, 6, 6> B =
+      white ? Eigen::Matrix<double, 6, 6>::Zero() : kernel_outer(b, sd, side);
   const Eigen::Matrix2d cov_t =
       white ? Eigen::Matrix2d(s2 * Pw.rightCols<2>()) : Eigen::Matrix2d((s2 / b2) * Pw * B * Pw.transpose());
   out.cov = out.A * cov_t * out.A.transpose();
@@ -205,18 +216,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
         g[k] = -Pw * sd[k];
         if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) g[k] += Pin * sd[k];
       }
-    if (!white) G.setZero();
-    for (int r = -1; !white && r <= side; ++r)
-      for (int c = -1; c <= side; ++c) {
-        Eigen::Vector2d f = Eigen::Vector2d::Zero();
-        for (int i = -1; i <= 1; ++i)
-          for (int j = -1; j <= 1; ++j) {
-            const int rr = r + i, cc = c + j;
-            if (rr < 0 || cc < 0 || rr >= side || cc >= side) continue;
-            f += double(b[(i + 1) * 3 + j + 1]) * g[rr * side + cc];
-          }
-        G.noalias() += f * f.transpose();
-      }
+    if (!white) G = kernel_outer(b, g, side);
     out.diff_cov_unit = out.A * (white ? G : Eigen::Matrix2d(G / b2)) * out.A.transpose();
     out.template_ss_dn2 = ss;
   }
