@@ -7,9 +7,11 @@
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--bayer] [--refusals] [--residual-p P] [--max-sigma PX]
+//                           [--wide-radius R]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates. --residual-p P,
-// --max-sigma PX: that test's setting (dense_match.hpp) for a what-if run.
+// --max-sigma PX: that test's setting (dense_match.hpp) for a what-if run. --wide-radius R: the
+// sparse path's wider LK window (sparse.hpp; 0: the narrow window only), also a what-if.
 #include <time.h>
 
 #include <Eigen/Core>  // before opencv2/core/eigen.hpp
@@ -227,6 +229,7 @@ int main(int argc, char** argv) {
   int seeds = 3;
   bool bayer = false, refusals = false;
   recon::scene::DenseSettings ds;
+  recon::scene::SparseSettings ss;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) seeds = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--bayer")) bayer = true;
@@ -234,6 +237,7 @@ int main(int argc, char** argv) {
     // What-if: one validity test loosened, to see what the pixels it refuses would give.
     if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
   }
   cv::setNumThreads(1);  // one core for both paths
   const recon::StereoRig rig =
@@ -241,7 +245,7 @@ int main(int argc, char** argv) {
   sim::SensorSettings sensor;
   sensor.bayer = bayer;
   const sim::TexturedRenderer renderer(rig, sensor);
-  recon::scene::SparseReconstructor ours(rig);
+  recon::scene::SparseReconstructor ours(rig, ss);
   recon::scene::SparseResult res;
   recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap depth;
