@@ -109,8 +109,12 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
 }
 
 void SparseReconstructor::load_luma(const RawImageView& left, const RawImageView& right) {
-  raw_to_luminance(left, luma_.left.data(), luma_.scratch.data());
-  raw_to_luminance(right, luma_.right.data(), luma_.scratch.data());
+  // A scene, not a board: the defect test allows for the texture (raw_to_luminance).
+  constexpr bool kTextured = true;
+  raw_to_luminance(left, luma_.left.data(), luma_.scratch.data(), kDefectThresholdDn, 0, -1, nullptr,
+                   kTextured);
+  raw_to_luminance(right, luma_.right.data(), luma_.scratch.data(), kDefectThresholdDn, 0, -1, nullptr,
+                   kTextured);
   luma_.bayer = left.layout == PixelLayout::bayer_grbg;
 }
 

@@ -69,15 +69,17 @@ TEST_P(SparseScene, AgainstTruth) {
   // Sigmas that hold.
   EXPECT_GE(f.z_rms, 0.7);
   EXPECT_LE(f.z_rms, 1.4);
-  // The wider LK window where the affine holds (sparse_wide.cpp): plane-far's depth error was 0.57 %
-  // mono, 1.08 % Bayer with the 9 x 9 window alone, 0.41 % and 0.81 % with it (seed 5); and the
-  // height field's curvature must keep it out: rms(err/sigma) 1.27 mono, 1.02 Bayer with 9 x 9
-  // alone, 2.12 mono with 13 x 13 everywhere, 1.93 mono and 1.18 Bayer with per-feature tests only.
+  // The wider LK window where the affine holds (sparse_wide.cpp), seed 5: plane-far's depth error
+  // is 0.57 % mono, 0.74 % Bayer with the 9 x 9 window alone, 0.41 % and 0.59 % with it; and the
+  // height field's curvature must keep it out: rms(err/sigma) 1.27 mono, 1.14 Bayer with 9 x 9
+  // alone (the Bayer figure rose from 1.02 when the scene luminance stopped repairing texture as
+  // defects, 2026-12-05: less noise, the same curvature misfit), 1.68 mono and 1.34 Bayer with the
+  // wider window everywhere.
   if (name == "plane-far") {
-    EXPECT_LE(f.rel_rms, bayer ? 0.0092 : 0.0048);
+    EXPECT_LE(f.rel_rms, bayer ? 0.0068 : 0.0048);
   }
   if (name == "height") {
-    EXPECT_LE(f.z_rms, bayer ? 1.12 : 1.32);
+    EXPECT_LE(f.z_rms, bayer ? 1.20 : 1.32);
   }
 }
 

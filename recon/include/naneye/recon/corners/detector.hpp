@@ -242,9 +242,14 @@ class CornerDetector {
 // With `balance` valid, a Bayer mosaic's sites are first mapped to G-equivalent values (white
 // balance from the frame itself, estimate_cfa_balance) so that the luminance is a grey board's
 // whatever the channel gains; `scratch` then holds that balanced mosaic (the noise is measured on it).
+// `textured`: the frame shows a textured scene, not a board. A board is flat but for its edges, so
+// a pixel beyond all its same-site neighbours is a defect; texture seen through a sharp lens puts
+// such extremes on ~0.5 % of a Bayer frame's pixels (same-site neighbours are 2 px apart), so a
+// defect must then also stand apart from its immediate neighbours brought to its colour (luma.cpp,
+// apart_from_its_texture). Hot, dead and stuck pixels still do.
 void raw_to_luminance(const RawImageView& image, float* out, float* scratch,
                       float defect_threshold_dn = kDefectThresholdDn, int row_lo = 0, int row_hi = -1,
-                      const CfaBalance* balance = nullptr);
+                      const CfaBalance* balance = nullptr, bool textured = false);
 
 // Orders a detected grid by one image-space convention so that two near-identical views number the
 // same physical corners alike: the column axis (row 0 -> col 0 .. cols-1) points to +x in the image
