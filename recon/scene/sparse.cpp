@@ -49,14 +49,15 @@ Eigen::Matrix2d predicted_affine(const StereoRig& rig, const Eigen::Vector2d& xl
 }  // namespace
 
 namespace {
-constexpr base::EnumTable<PointStatus, 7> kPointStatusNames{
+constexpr base::EnumTable<PointStatus, 8> kPointStatusNames{
     {{PointStatus::ok, "ok"},
      {PointStatus::no_candidates, "no_candidates"},
      {PointStatus::weak_match, "weak_match"},
      {PointStatus::ambiguous, "ambiguous"},
      {PointStatus::refinement_failed, "refinement_failed"},
      {PointStatus::left_right_mismatch, "left_right_mismatch"},
-     {PointStatus::triangulation_failed, "triangulation_failed"}}};
+     {PointStatus::triangulation_failed, "triangulation_failed"},
+     {PointStatus::imprecise, "imprecise"}}};
 }  // namespace
 
 const char* to_string(PointStatus s) {
@@ -158,11 +159,23 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
     p.right_px.setConstant(std::numeric_limits<double>::quiet_NaN());
     wide_.emplace_back();
     match(luma, f, p, wide_.back());
-    out.valid_count += p.valid();
+    // Counted as one of max_points if either window's depth is precise enough (choose_wide may
+    // still refuse the wider one: the final count follows it).
+    const WideCandidate& wc = wide_.back();
+    out.valid_count +=
+        p.valid() && (precise(p.X, p.depth_sigma_mm) || (wc.usable && precise(wc.X, wc.depth_sigma_mm)));
     out.points.push_back(p);
     ++tried;
   }
   choose_wide(out);
+  out.valid_count = 0;
+  for (ScenePoint& p : out.points) {
+    if (p.valid() && !precise(p.X, p.depth_sigma_mm)) {
+      p.status = PointStatus::imprecise;
+      p.X.setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
+    out.valid_count += p.valid();
+  }
   const std::span<std::int64_t> ids(id_scratch_.data(), tried);
   ids_.assign(L, std::span<const Feature>(features_.data(), tried), ids);
   for (std::size_t k = 0; k < tried; ++k) out.points[k].id = ids[k];

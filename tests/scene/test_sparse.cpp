@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "naneye/recon/scene/sparse.hpp"
 #include "scene_fixture.hpp"
@@ -84,6 +85,54 @@ TEST_P(SparseScene, AgainstTruth) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Presets, SparseScene, test::every_preset(), test::preset_case_name);
+
+// At a real NanEye's blur (edges 1.0-1.6 px, ../shared/notes/measurements.md; the presets are rendered
+// at 0.41 px) the far plane's texture is faint and a fifth of its points carry depth sigmas of 2-4 %:
+// given, 2-3 % of them land beyond 5 % of the truth. Flagged `imprecise` instead, none does, and
+// every point given holds its depth to max_depth_sigma_rel.
+TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
+  sim::SensorSettings sensor;
+  sensor.defocus_sigma_px = 1.2;  // 1.22 px in all with the diffraction
+  const sim::TexturedRenderer renderer(test::paper_d3(), sensor);
+  const auto& rig = test::paper_d3();
+  int outliers[2] = {0, 0}, valid[2] = {0, 0}, flagged = 0;
+  for (int k = 0; k < 3; ++k) {  // bench_scene's three renders
+    sim::TexturedSceneSettings scene = *sim::textured_preset("plane-far");
+    scene.texture.seed += static_cast<std::uint64_t>(100 * k);
+    sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
+    const sim::TexturedPair p = renderer.render(scene, rng);
+    for (int flag = 0; flag < 2; ++flag) {
+      recon::scene::SparseSettings s;
+      if (!flag) s.max_depth_sigma_rel = std::numeric_limits<double>::infinity();
+      recon::scene::SparseReconstructor sr(rig, s);
+      recon::scene::SparseResult res;
+      sr.reconstruct(sim::raw_view(p.left), sim::raw_view(p.right), res);
+      for (const auto& q : res.points) {
+        if (q.status == recon::scene::PointStatus::imprecise) {
+          ++flagged;
+          EXPECT_TRUE(std::isnan(q.X.z()));
+          EXPECT_TRUE(flag);
+        }
+        if (!q.valid()) continue;
+        ++valid[flag];
+        if (flag) {
+          EXPECT_LE(q.depth_sigma_mm, s.max_depth_sigma_rel * q.X.z());
+        }
+        const double zt =
+            p.depth.at<double>(static_cast<int>(q.left_px.y()), static_cast<int>(q.left_px.x()));
+        outliers[flag] += !(std::abs(q.X.z() - zt) <= 0.05 * zt);
+      }
+    }
+  }
+  std::printf(
+      "plane-far, blur 1.22 px, 3 renders: all given %d points, %d beyond 5 %%; flagged: %d given, %d "
+      "beyond 5 %%, %d imprecise\n",
+      valid[0], outliers[0], valid[1], outliers[1], flagged);
+  EXPECT_GT(outliers[0], 0.015 * valid[0]);  // what the flag is for: the issue asks <= 1 %
+  EXPECT_LE(outliers[1], 0.01 * valid[1]);
+  EXPECT_GE(valid[1], 3 * 300);
+  EXPECT_GT(flagged, 0);
+}
 
 }  // namespace
 }  // namespace naneye

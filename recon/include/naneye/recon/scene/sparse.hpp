@@ -46,6 +46,13 @@ struct SparseSettings {
   // 64, 1.27 (the narrow window's own) at 96, while the planes keep all their wider windows.
   double wide_pool_radius_px = 96;
   double lr_tolerance_px = 1.0;  // px; right-to-left search must land this close to the feature
+  // A point whose depth sigma exceeds this share of its depth is flagged `imprecise` instead of
+  // given: 5 % of the depth would lie within its 3 sigma (the outlier line), so its depth is
+  // not one to stand behind. Rare at the simulator's default sharpness (blur 0.41 px: 2 of 1536
+  // points on plane-far); at a real NanEye's blur (edges 1.0-1.6 px; at 1.22 px ~20 % of
+  // plane-far's points at 55-75 mm), where 2.2 % (mono) and 3.4 % (Bayer) of the points given
+  // were more than 5 % off without it, 0.3 % and 0.15 % with it (docs/scene.md, "Blur").
+  double max_depth_sigma_rel = 0.05 / 3;
   int max_features = 1536;
   // The valid points a pair needs: the issue's >= 300 good points per pair, with room for a scene
   // the right eye half misses. Features are tried coarse to fine over the image (one per 4 x 4
@@ -63,6 +70,7 @@ enum class PointStatus {
   refinement_failed,    // LK diverged, left the image or the right domain
   left_right_mismatch,  // the right-to-left search lands elsewhere
   triangulation_failed,
+  imprecise,  // matched and triangulated, but its depth sigma is above max_depth_sigma_rel
 };
 
 const char* to_string(PointStatus s);
@@ -121,6 +129,10 @@ class SparseReconstructor {
   void match(const StereoLuma& luma, const Feature& f, ScenePoint& p, WideCandidate& wc);
   bool triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,
                          const Eigen::Matrix2d& cov_px, Eigen::Vector3d& X, double& depth_sigma_mm) const;
+  // SparseSettings::max_depth_sigma_rel.
+  bool precise(const Eigen::Vector3d& X, double depth_sigma_mm) const {
+    return depth_sigma_mm <= s_.max_depth_sigma_rel * X.z();
+  }
   void init_wide();
   // Each valid point takes its wider window's match where its neighbourhood's pooled shift test
   // passes (sparse_wide.cpp).
