@@ -35,6 +35,22 @@ Eigen::Matrix<double, D, D> kernel_outer(const std::array<float, 9>& b,
 }
 constexpr int kMaxN = 15 * 15;
 
+// Variance of a central-difference gradient, (x[+1] - x[-1]) / 2, of noise filtered by the 3 x 3
+// kernel b, per unit of the filtered noise's own variance: 1/2 for white noise.
+double gradient_noise_ratio(const std::array<float, 9>& b) {
+  double g2 = 0, b2 = 0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = -1; c <= 3; ++c) {  // (b * d)(r, c), d = [-1/2 0 1/2] along the row
+      const auto at = [&](int cc) {
+        return cc < 0 || cc > 2 ? 0.0 : double(b[static_cast<std::size_t>(r * 3 + cc)]);
+      };
+      const double v = 0.5 * (at(c - 1) - at(c + 1));
+      g2 += v * v;
+    }
+  for (float x : b) b2 += double(x) * x;
+  return g2 / b2;
+}
+
 }  // namespace
 
 double noise_dof_factor(const std::array<float, 9>& b) {
@@ -74,6 +90,10 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   const Eigen::Matrix2d to_q = shape ? Eigen::Matrix2d(A0.inverse()) : Eigen::Matrix2d::Identity();
   Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 6> Hin = H;  // over the inner pixels (LkSettings::inner_radius)
+  // The part of H (and Hin) the template's own noise puts in it through its gradients, per unit of
+  // gradient noise variance (errors in variables, below).
+  Eigen::Matrix<double, 6, 6> En = H, En_in = H;
+  const Eigen::Matrix2d gq = to_q.transpose() * to_q;
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
     for (int dc = -rad; dc <= rad; ++dc, ++k) {
       t[k] = static_cast<float>((t[k] - mean) * scale);
@@ -84,13 +104,19 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const Eigen::RowVector2d g = Eigen::RowVector2d(tgx[p] * scale, tgy[p] * scale) * to_q;
       // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5).
       sd[k] << g.x() * q[k].x(), g.x() * q[k].y(), g.y() * q[k].x(), g.y() * q[k].y(), g.x(), g.y();
+      Eigen::Matrix<double, 6, 2> K;  // sd = K g^T
+      K << q[k].x(), 0, q[k].y(), 0, 0, q[k].x(), 0, q[k].y(), 1, 0, 0, 1;
       // With inner_radius, H = Hin + the ring's sum (one outer product per pixel either way).
-      if (s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius)
+      if (s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) {
         Hin.noalias() += sd[k] * sd[k].transpose();
-      else
+        En_in.noalias() += K * gq * K.transpose();
+      } else {
         H.noalias() += sd[k] * sd[k].transpose();
+        En.noalias() += K * gq * K.transpose();
+      }
     }
   H += Hin;
+  En += En_in;
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (ldlt.info() != Eigen::Success) return out;
   // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
@@ -186,35 +212,46 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   // Covariance of the template-frame translation, mapped to the target by the warp. Residual noise
   // per image pixel: s^2 = SSR / (N - 8); with correlated noise (lk_affine.hpp) the sandwich form.
   const double s2 = ssr / (n - 8);
-  // Only the translation's rows of H^-1 (H symmetric: the solve against the last two unit vectors).
-  const Eigen::Matrix<double, 2, 6> Pw =
-      ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
   const auto& b = s.noise_kernel;
   double b2 = 0;
   for (float x : b) b2 += double(x) * x;
   const bool white = b == LkSettings{}.noise_kernel;
-  // (b * SD) over the window grown by one pixel; white: B = H, not needed.
-  const Eigen::Matrix<double, 6, 6> B =
-      white ? Eigen::Matrix<double, 6, 6>::Zero() : kernel_outer(b, sd, side);
-  const Eigen::Matrix2d cov_t =
-      white ? Eigen::Matrix2d(s2 * Pw.rightCols<2>()) : Eigen::Matrix2d((s2 / b2) * Pw * B * Pw.transpose());
+  // Errors in variables (Fuller, "Measurement Error Models", 1987, Sec. 1.1): the steepest-descent
+  // images are the noisy template's gradients, so H = sum sd sd^T holds their noise too, and the
+  // fit's sensitivity is the signal's part only, Hs = H - E[noise part]. Then the shift is
+  // Hs^-1 sum_k sd_k e_k and its covariance the sandwich Hs^-1 (sum sd sd^T s^2) Hs^-1, larger than
+  // s^2 H^-1 by up to 1 / (1 - f)^2 where the noise is the share f of H: negligible on a sharp,
+  // contrasty texture, ~1.5x where a blurred one is faint. The template's noise variance is half the
+  // residual's (both eyes' noise is in it); its gradients' the kernel's share of that.
+  const double grad_noise = 0.5 * s2 * gradient_noise_ratio(b);
+  const Eigen::Matrix<double, 6, 6> Hs = H - grad_noise * En;
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> lds(Hs);
+  // A template whose gradients are mostly its noise fixes no shift: no match.
+  if (lds.info() != Eigen::Success || !lds.isPositive() || !(lds.vectorD().minCoeff() > 0)) return LkResult{};
+  // Only the translation's rows of Hs^-1 (symmetric: the solve against the last two unit vectors).
+  const Eigen::Matrix<double, 2, 6> Pw =
+      lds.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
+  // (b * SD) over the window grown by one pixel; white: B = H.
+  const Eigen::Matrix<double, 6, 6> B = white ? H : kernel_outer(b, sd, side);
+  const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * Pw * B * Pw.transpose();
   out.cov = out.A * cov_t * out.A.transpose();
   if (s.inner_radius > 0) {
     // Linearised, each fit's translation is a weighted sum of the residuals: H^-1 sum_k sd_k e_k, the
     // inner fit's over its own pixels. Their difference is sum_k g_k e_k, whose covariance is the
     // same sandwich over g (exact for correlated noise, where the wide fit is not the efficient one
     // and Hausman's Sigma_inner - Sigma_wide does not hold).
-    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> lin(Hin);
-    if (lin.info() != Eigen::Success) return LkResult{};
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> lin(Hin - grad_noise * En_in);
+    if (lin.info() != Eigen::Success || !lin.isPositive() || !(lin.vectorD().minCoeff() > 0))
+      return LkResult{};
     const Eigen::Matrix<double, 2, 6> Pin =
         lin.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
-    // White noise: sum_k g_k g_k^T = (Hin^-1 - H^-1)_tt (Pin Hin = Pw H = the unit rows), Hausman's form.
-    Eigen::Matrix2d G = Pin.rightCols<2>() - Pw.rightCols<2>();
     std::array<Eigen::Vector2d, kMaxN> g;
-    for (int dr = -rad, k = 0; !white && dr <= rad; ++dr)
+    Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
+    for (int dr = -rad, k = 0; dr <= rad; ++dr)
       for (int dc = -rad; dc <= rad; ++dc, ++k) {
         g[k] = -Pw * sd[k];
         if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) g[k] += Pin * sd[k];
+        if (white) G.noalias() += g[k] * g[k].transpose();
       }
     if (!white) G = kernel_outer(b, g, side);
     out.diff_cov_unit = out.A * (white ? G : Eigen::Matrix2d(G / b2)) * out.A.transpose();

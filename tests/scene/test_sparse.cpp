@@ -95,7 +95,8 @@ TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
   sensor.defocus_sigma_px = 1.2;  // 1.22 px in all with the diffraction
   const sim::TexturedRenderer renderer(test::paper_d3(), sensor);
   const auto& rig = test::paper_d3();
-  int outliers[2] = {0, 0}, valid[2] = {0, 0}, flagged = 0;
+  int outliers[2] = {0, 0}, valid[2] = {0, 0}, flagged = 0, inliers = 0;
+  double z2 = 0;
   for (int k = 0; k < 3; ++k) {  // bench_scene's three renders
     sim::TexturedSceneSettings scene = *sim::textured_preset("plane-far");
     scene.texture.seed += static_cast<std::uint64_t>(100 * k);
@@ -121,6 +122,10 @@ TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
         const double zt =
             p.depth.at<double>(static_cast<int>(q.left_px.y()), static_cast<int>(q.left_px.x()));
         outliers[flag] += !(std::abs(q.X.z() - zt) <= 0.05 * zt);
+        if (flag && std::abs(q.X.z() - zt) <= 0.05 * zt) {
+          z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+          ++inliers;
+        }
       }
     }
   }
@@ -132,6 +137,11 @@ TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
   EXPECT_LE(outliers[1], 0.01 * valid[1]);
   EXPECT_GE(valid[1], 3 * 300);
   EXPECT_GT(flagged, 0);
+  // Sigmas that hold at this blur too (the template's gradient noise in them, lk_affine.cpp).
+  const double z_rms = std::sqrt(z2 / std::max(1, inliers));
+  std::printf("rms(err/sigma) of the points given: %.2f\n", z_rms);
+  EXPECT_GE(z_rms, 0.7);
+  EXPECT_LE(z_rms, 1.4);
 }
 
 }  // namespace
