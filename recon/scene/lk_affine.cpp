@@ -91,9 +91,9 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 6> Hin = H;  // over the inner pixels (LkSettings::inner_radius)
   // The part of H (and Hin) the template's own noise puts in it through its gradients, per unit of
-  // gradient noise variance (errors in variables, below).
-  Eigen::Matrix<double, 6, 6> En = H, En_in = H;
-  const Eigen::Matrix2d gq = to_q.transpose() * to_q;
+  // gradient noise variance (errors in variables, below): sd = (gx u0, gx u1, gy u0, gy u1, gx u2,
+  // gy u2) with u = (qx, qy, 1), so E[sd sd^T] = cov(g)(c_i, c_j) u_i u_j: the sums of u u^T suffice.
+  Eigen::Matrix3d U = Eigen::Matrix3d::Zero(), U_in = U;
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
     for (int dc = -rad; dc <= rad; ++dc, ++k) {
       t[k] = static_cast<float>((t[k] - mean) * scale);
@@ -104,19 +104,27 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const Eigen::RowVector2d g = Eigen::RowVector2d(tgx[p] * scale, tgy[p] * scale) * to_q;
       // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5).
       sd[k] << g.x() * q[k].x(), g.x() * q[k].y(), g.y() * q[k].x(), g.y() * q[k].y(), g.x(), g.y();
-      Eigen::Matrix<double, 6, 2> K;  // sd = K g^T
-      K << q[k].x(), 0, q[k].y(), 0, 0, q[k].x(), 0, q[k].y(), 1, 0, 0, 1;
+      const Eigen::Vector3d uq(q[k].x(), q[k].y(), 1.0);
       // With inner_radius, H = Hin + the ring's sum (one outer product per pixel either way).
       if (s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) {
         Hin.noalias() += sd[k] * sd[k].transpose();
-        En_in.noalias() += K * gq * K.transpose();
+        U_in.noalias() += uq * uq.transpose();
       } else {
         H.noalias() += sd[k] * sd[k].transpose();
-        En.noalias() += K * gq * K.transpose();
+        U.noalias() += uq * uq.transpose();
       }
     }
   H += Hin;
-  En += En_in;
+  U += U_in;
+  const Eigen::Matrix2d gq = to_q.transpose() * to_q;  // cov(g) per unit of gradient noise variance
+  const auto noise_part = [&gq](const Eigen::Matrix3d& u) {
+    static constexpr int kG[6] = {0, 0, 1, 1, 0, 1}, kU[6] = {0, 1, 0, 1, 2, 2};
+    Eigen::Matrix<double, 6, 6> e;
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) e(i, j) = gq(kG[i], kG[j]) * u(kU[i], kU[j]);
+    return e;
+  };
+  const Eigen::Matrix<double, 6, 6> En = noise_part(U), En_in = noise_part(U_in);
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (ldlt.info() != Eigen::Success) return out;
   // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
