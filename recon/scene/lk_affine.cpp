@@ -51,6 +51,22 @@ double gradient_noise_ratio(const std::array<float, 9>& b) {
   return g2 / b2;
 }
 
+void add_moments(std::array<double, 6>& m, double x, double y) {
+  m[0] += x * x;
+  m[1] += x * y;
+  m[2] += y * y;
+  m[3] += x;
+  m[4] += y;
+  m[5] += 1;
+}
+
+// sum u u^T, u = (x, y, 1), from add_moments' sums.
+Eigen::Matrix3d moment_matrix(const std::array<double, 6>& m) {
+  Eigen::Matrix3d u;
+  u << m[0], m[1], m[3], m[1], m[2], m[4], m[3], m[4], m[5];
+  return u;
+}
+
 }  // namespace
 
 double noise_dof_factor(const std::array<float, 9>& b) {
@@ -93,7 +109,8 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   // The part of H (and Hin) the template's own noise puts in it through its gradients, per unit of
   // gradient noise variance (errors in variables, below): sd = (gx u0, gx u1, gy u0, gy u1, gx u2,
   // gy u2) with u = (qx, qy, 1), so E[sd sd^T] = cov(g)(c_i, c_j) u_i u_j: the sums of u u^T suffice.
-  Eigen::Matrix3d U = Eigen::Matrix3d::Zero(), U_in = U;
+  // Sums of qx^2, qx qy, qy^2, qx, qy, 1 over the ring (ring) and the inner pixels (in).
+  std::array<double, 6> ring{}, in{};
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
     for (int dc = -rad; dc <= rad; ++dc, ++k) {
       t[k] = static_cast<float>((t[k] - mean) * scale);
@@ -104,19 +121,19 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const Eigen::RowVector2d g = Eigen::RowVector2d(tgx[p] * scale, tgy[p] * scale) * to_q;
       // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5).
       sd[k] << g.x() * q[k].x(), g.x() * q[k].y(), g.y() * q[k].x(), g.y() * q[k].y(), g.x(), g.y();
-      const Eigen::Vector3d uq(q[k].x(), q[k].y(), 1.0);
+      const double ux = q[k].x(), uy = q[k].y();
       // With inner_radius, H = Hin + the ring's sum (one outer product per pixel either way).
       if (s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) {
         Hin.noalias() += sd[k] * sd[k].transpose();
-        U_in.noalias() += uq * uq.transpose();
+        add_moments(in, ux, uy);
       } else {
         H.noalias() += sd[k] * sd[k].transpose();
-        U.noalias() += uq * uq.transpose();
+        add_moments(ring, ux, uy);
       }
     }
   H += Hin;
-  U += U_in;
-  const Eigen::Matrix2d gq = to_q.transpose() * to_q;  // cov(g) per unit of gradient noise variance
+  for (std::size_t i = 0; i < 6; ++i) ring[i] += in[i];  // the whole window
+  const Eigen::Matrix2d gq = to_q.transpose() * to_q;    // cov(g) per unit of gradient noise variance
   const auto noise_part = [&gq](const Eigen::Matrix3d& u) {
     static constexpr int kG[6] = {0, 0, 1, 1, 0, 1}, kU[6] = {0, 1, 0, 1, 2, 2};
     Eigen::Matrix<double, 6, 6> e;
@@ -124,7 +141,8 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       for (int j = 0; j < 6; ++j) e(i, j) = gq(kG[i], kG[j]) * u(kU[i], kU[j]);
     return e;
   };
-  const Eigen::Matrix<double, 6, 6> En = noise_part(U), En_in = noise_part(U_in);
+  const Eigen::Matrix<double, 6, 6> En = noise_part(moment_matrix(ring)),
+                                    En_in = noise_part(moment_matrix(in));
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (ldlt.info() != Eigen::Success) return out;
   // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
@@ -253,15 +271,20 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       return LkResult{};
     const Eigen::Matrix<double, 2, 6> Pin =
         lin.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
-    std::array<Eigen::Vector2d, kMaxN> g;
-    Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
-    for (int dr = -rad, k = 0; dr <= rad; ++dr)
-      for (int dc = -rad; dc <= rad; ++dc, ++k) {
-        g[k] = -Pw * sd[k];
-        if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) g[k] += Pin * sd[k];
-        if (white) G.noalias() += g[k] * g[k].transpose();
-      }
-    if (!white) G = kernel_outer(b, g, side);
+    Eigen::Matrix2d G;
+    if (white) {
+      // sum_k g_k g_k^T with g_k = (Pin [k inner] - Pw) sd_k, from the sums H and Hin.
+      const Eigen::Matrix2d cross = Pw * Hin * Pin.transpose();
+      G = Pw * H * Pw.transpose() - cross - cross.transpose() + Pin * Hin * Pin.transpose();
+    } else {
+      std::array<Eigen::Vector2d, kMaxN> g;
+      for (int dr = -rad, k = 0; dr <= rad; ++dr)
+        for (int dc = -rad; dc <= rad; ++dc, ++k) {
+          g[k] = -Pw * sd[k];
+          if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) g[k] += Pin * sd[k];
+        }
+      G = kernel_outer(b, g, side);
+    }
     out.diff_cov_unit = out.A * (white ? G : Eigen::Matrix2d(G / b2)) * out.A.transpose();
     out.template_ss_dn2 = ss;
   }
