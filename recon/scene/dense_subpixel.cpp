@@ -132,6 +132,9 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
         b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
         s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
         z_[i] = static_cast<float>(Sww / det);
+        sww_[i] = static_cast<float>(Sww);
+        swg_[i] = static_cast<float>(Swg);
+        sgg_[i] = static_cast<float>(Sgg);
         if (!(a > 0)) return;  // anti-correlated: validate() refuses it
         // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
         mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));

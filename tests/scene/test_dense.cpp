@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "naneye/recon/scene/dense.hpp"
 #include "scene_fixture.hpp"
@@ -138,10 +139,18 @@ TEST_P(DenseImaging, HonestOnTheSphere) {
   const sim::TexturedPair p = renderer.render(scene, rng);
   recon::scene::DepthMap map;
   const DenseFigures f = run(p, c.bayer, map, c.label);
-  // Dim or blurred and noisy: 1.52-1.54 measured (the noise spread itself is 1.22 sigma at low
-  // signal to noise, bench_dense_sigma).
-  expect_honest(f, map, 1.65, 0.01);
-  EXPECT_GE(static_cast<double>(f.covered) / std::max(1, f.truth_visible), c.bayer ? 0.75 : 0.8);
+  // Dim or blurred and noisy: 1.43-1.45 measured (1.52-1.56 before the fit's sigma took the right
+  // image's own noise out of its sums, dense_match.cpp eiv_zc; the noise spread itself is 1.22 sigma
+  // at low signal to noise, bench_dense_sigma).
+  expect_honest(f, map, 1.5, 0.01);
+  // The 80 % (75 % Bayer) held here (80.8 and 83.5 %) only while those sigmas were 1.5x too
+  // small: with the honest sigma the basin bound (max_sigma_px) refuses the faintest windows and the
+  // two mono conditions cover 72.5 and 76.8 %. Held to what the method gives, so that a regression
+  // shows; docs/scene.md lists the gap.
+  const bool faint = std::string(c.label) != "bayer_gains";
+  EXPECT_GE(static_cast<double>(f.covered) / std::max(1, f.truth_visible), faint     ? 0.70
+                                                                           : c.bayer ? 0.75
+                                                                                     : 0.8);
 }
 
 INSTANTIATE_TEST_SUITE_P(Conditions, DenseImaging,

@@ -122,6 +122,8 @@ class RectifiedMatcher {
   int bin_of(const float f[2]) const;
   double expected_dof(std::size_t i) const;
   double expected_residual(std::size_t i) const;
+  // The last fit's (A^-1)_cc with the right image's noise taken out of A (dense_match.cpp).
+  double eiv_zc(std::size_t i, double grad_ratio) const;
 
   // Residual variance per kind of window, 8 x 8 bins of (mean level, log contrast): shot noise is
   // linear in the level, the misfit grows with contrast; 64 bins still hold ~1000 windows each on
@@ -146,9 +148,9 @@ class RectifiedMatcher {
   cv::Mat integer_;
   cv::Mat disp_, sigma_;
   // Per pixel: the Gauss-Newton state (disparity, gain, offset, last step times gain, residual
-  // variance, noise correlation factor, window count, (A^-1)_cc) and the window sums
-  // (channel-major planes of w * h).
-  std::vector<float> d_, a_, b_, c_, s2_, kappa_px_, n_, z_, smooth_step_;
+  // variance, noise correlation factor, window count, (A^-1)_cc, the last fit's centred sums Sww,
+  // Swg, Sgg for its errors-in-variables sigma) and the window sums (channel-major planes of w * h).
+  std::vector<float> d_, a_, b_, c_, s2_, kappa_px_, n_, z_, smooth_step_, sww_, swg_, sgg_;
   MatchCounts counts_;
   std::vector<float> chan_, sums_, line_;
   std::vector<float> scratch_, line_copy_;
