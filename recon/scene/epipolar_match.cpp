@@ -174,8 +174,15 @@ CurveMatch match_along_curve(const GrayView& src, int u, int v, const GrayView& 
   if (best < 0) return m;
   m.found = true;
   m.best = score[best];
+  // The second best is the best of the other peaks: the samples beyond the best one's lobe (where
+  // the score falls monotonically on either side). A fixed distance would take the lobe's own
+  // shoulder for a second match where the texture is blurred: at 1.22 px blur the lobe is wider
+  // than 2 samples and the tube's ambiguous features doubled.
+  int lo = best, hi = best;
+  while (lo > 0 && score[lo - 1] > -2 && score[lo - 1] <= score[lo]) --lo;
+  while (hi + 1 < curve.n && score[hi + 1] > -2 && score[hi + 1] <= score[hi]) ++hi;
   for (int i = 0; i < curve.n; ++i)
-    if (std::abs(i - best) >= 2) m.second = std::max(m.second, score[i]);
+    if (i < lo || i > hi) m.second = std::max(m.second, score[i]);
   double frac = 0;
   if (best > 0 && best + 1 < curve.n && score[best - 1] > -2 && score[best + 1] > -2) {
     const double a = score[best - 1], b = score[best], c = score[best + 1];

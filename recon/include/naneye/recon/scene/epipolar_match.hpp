@@ -29,7 +29,7 @@ void sample_epipolar_curve(const CameraModel& other, const Eigen::Matrix3d& R, c
 struct CurveMatch {
   bool found = false;        // some sample had a full, usable window
   double best = -1;          // ZNCC of the best sample
-  double second = -1;        // best ZNCC more than 1.5 samples away from it (the ambiguity)
+  double second = -1;        // best ZNCC beyond the best's lobe: another peak (the ambiguity)
   double index = -1;         // fractional sample index (a parabola through the best three)
   Eigen::Vector2d px{0, 0};  // raw pixel at `index` (linear between samples)
   double w = 0;
