@@ -196,10 +196,6 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
   // included; a wrong match or an occlusion stands out against it.
   level_medians(min_n);
   const double zq = upper_normal_quantile(s_.residual_p);
-  // The residual's lag-2 autocorrelation along the rows: the right image's gradient, a central
-  // difference over +-1 px, has (1 - rho(2)) / 2 of its value's noise variance.
-  const auto rho_side = static_cast<std::size_t>(std::lround(std::sqrt(static_cast<double>(rho_.size()))));
-  const double grad_ratio = 0.5 * (1.0 - rho_[rho_side / 2 * rho_side + rho_side / 2 + 2]);
   MatchCounts c;
   const int matchable_from = s_.min_disparity + s_.num_disparities;
   for (int y = 0; y < h_; ++y) {
@@ -228,7 +224,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
         ++c.shift;
         continue;
       }
-      const double zc = eiv_zc(i, grad_ratio);
+      const double zc = eiv_zc(i);
       const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2_[i] * zc) / a_[i];
       if (!(sigma <= s_.max_sigma_px)) {
         ++c.texture;
@@ -282,13 +278,13 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
 // sensitivity is As = A - N diag(vw, vg). The estimate's variance per unit residual variance is then
 // the sandwich (As^-1 A As^-1)_cc, not (A^-1)_cc: larger where the texture is faint against the
 // noise (a blurred image), nearly the same on a sharp one. The right image's noise variance v comes
-// from the residual's, s^2 = v (1 + a^2) (the eyes alike); vw = v, vg = grad_ratio v. A window whose
+// from the residual's, s^2 = v (1 + a^2) (the eyes alike); vw = v, vg = grad_noise_ratio_ v. A window whose
 // gradient is mostly noise (As not positive) gives infinity: no sigma to stand behind.
-double RectifiedMatcher::eiv_zc(std::size_t i, double grad_ratio) const {
+double RectifiedMatcher::eiv_zc(std::size_t i) const {
   const double N = n_[i], a = a_[i];
   const double v = s2_[i] / (1.0 + a * a);
   const double p = sww_[i], q = swg_[i], r = sgg_[i];
-  const double ps = p - N * v, rs = r - N * grad_ratio * v;
+  const double ps = p - N * v, rs = r - N * grad_noise_ratio_ * v;
   const double dets = ps * rs - q * q;
   if (!(ps > 0 && rs > 0 && dets > 0)) return std::numeric_limits<double>::infinity();
   // As^-1 = [rs q; q ps] / dets (As = [ps -q; -q rs]); its c row: (q, ps) / dets.

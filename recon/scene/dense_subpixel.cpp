@@ -280,6 +280,9 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   const double e0 = acc[kLag][kLag] > 0 ? acc[kLag][kLag] : 1.0;
   for (int k = 0; k < kSide * kSide; ++k)
     rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / kSide][k % kSide] / e0);
+  // The right image's gradient is a central difference over +-1 px along the rows: (1 - rho(2)) / 2
+  // of its value's noise variance, rho(2) the residual's lag-2 autocorrelation (validate(), eiv_zc).
+  grad_noise_ratio_ = 0.5 * (1.0 - rho_[static_cast<std::size_t>(kLag * kSide + kLag + 2)]);
   // kappa = sum_ij z_i z_j rho_ij / sum_i z_i^2 over the window, z the derivative regressor centred
   // on the window: the variance of the sandwich estimate over the white-noise one.
   float* z = chan_.data() + 4 * n;

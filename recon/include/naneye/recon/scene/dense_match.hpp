@@ -123,7 +123,7 @@ class RectifiedMatcher {
   double expected_dof(std::size_t i) const;
   double expected_residual(std::size_t i) const;
   // The last fit's (A^-1)_cc with the right image's noise taken out of A (dense_match.cpp).
-  double eiv_zc(std::size_t i, double grad_ratio) const;
+  double eiv_zc(std::size_t i) const;
 
   // Residual variance per kind of window, 8 x 8 bins of (mean level, log contrast): shot noise is
   // linear in the level, the misfit grows with contrast; 64 bins still hold ~1000 windows each on
@@ -166,6 +166,7 @@ class RectifiedMatcher {
   bool avx2_ = false;                              // the plane kernels' 8-float versions (dense_simd.hpp)
   std::array<std::uint32_t, 4096> select_hist_{};  // the medians' counts (scene/select.hpp)
   double residual_sigma_ = 0, kappa_ = 1;
+  double grad_noise_ratio_ = 0.5;  // the right gradient's noise variance per its value's (correlation())
 };
 
 }  // namespace naneye::recon::scene
