@@ -197,14 +197,11 @@ FastFitScratch::FastFitScratch() : use_avx2(simd::avx2_available()) {
   }
 }
 
-bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
-                     const SaddleInit& init, const EdgeDirections* edges, double radius, int max_iterations,
-                     double tolerance_px, FastFitScratch& w, SaddleFit& out) {
-  constexpr double kHalfPi = 1.57079632679489661923;
-  out = SaddleFit{};
+bool load_fit_window(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
+                     const Eigen::Vector2d& px, double radius, FastFitScratch& w, FitWindow& win) {
   const int half = static_cast<int>(std::ceil(radius)) + 1;
   if (radius < 1.5 || half > FastFitScratch::kMaxHalf) return false;
-  const int cx = static_cast<int>(std::lround(init.px.x())), cy = static_cast<int>(std::lround(init.px.y()));
+  const int cx = static_cast<int>(std::lround(px.x())), cy = static_cast<int>(std::lround(px.y()));
   if (cx - half < 0 || cx + half >= img.col_end || cy - half < img.row_begin || cy + half >= img.row_end) {
     return false;
   }
@@ -235,7 +232,7 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
     Jp = Kaff * cam.distort_jacobian(x0);
   }
   const Eigen::Matrix2f Jf = Jp.cast<float>();
-  const Eigen::Vector2d off = init.px - Eigen::Vector2d(cx, cy);
+  const Eigen::Vector2d off = px - Eigen::Vector2d(cx, cy);
   const float inv_half = 1.0f / static_cast<float>(half);
   // Weight 1 up to `radius` (Chebyshev from the start), a 1 px linear taper beyond: the fit varies
   // continuously with where it starts, so tracking and full search agree. The Chebyshev weight is
@@ -291,6 +288,23 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
 
   // Whole vectors are read past n (corners/simd.hpp): the tail pixels get zero weight.
   for (int i = n; i < ((n + 7) & ~7); ++i) dx[i] = dy[i] = wyx[i] = wyy[i] = val[i] = wt[i] = 0.0f;
+
+  win = FitWindow{n, cx, cy, half, undist, x0, off, Jp};
+  return true;
+}
+
+bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
+                     const SaddleInit& init, const EdgeDirections* edges, double radius, int max_iterations,
+                     double tolerance_px, FastFitScratch& w, SaddleFit& out) {
+  constexpr double kHalfPi = 1.57079632679489661923;
+  out = SaddleFit{};
+  FitWindow win;
+  if (!load_fit_window(img, cam, map, init.px, radius, w, win)) return false;
+  const int n = win.n, cx = win.cx, cy = win.cy, half = win.half;
+  const bool undist = win.undistorted;
+  const Eigen::Vector2d x0 = win.x0, off = win.off;
+  const Eigen::Matrix2d Jp = win.Jp;
+  float *wyx = w.yx.data(), *wyy = w.yy.data(), *wt = w.wt.data();
 
   Vec p;
   // y = p - c to first order: the start needs no more.

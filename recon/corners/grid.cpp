@@ -75,7 +75,9 @@ int quadrant_polarity(const LumaView& img, const Eigen::Vector2d& p, const Eigen
   const bool small = square_centres && std::min((0.35 * (dc + dr)).norm(), (0.35 * (dc - dr)).norm()) < 2.5;
   for (const double f : {small ? 0.5 : 0.35, 0.25, 0.18}) {
     const Eigen::Vector2d s1 = f * (dc + dr), s2 = f * (dc - dr);
-    if (std::min(s1.norm(), s2.norm()) < 2.5) break;
+    // A square's centre is the best a small square has: there 2.0 px from the corner (squares of
+    // ~2.8 px, under 3 blurs: no board the fits could measure) is the floor.
+    if (std::min(s1.norm(), s2.norm()) < (f == 0.5 ? 2.0 : 2.5)) break;
     const Eigen::Vector2d a = p + s1, b = p - s1, c = p + s2, d = p - s2;
     va = bilinear(img, a.x(), a.y());
     vb = bilinear(img, b.x(), b.y());

@@ -7,6 +7,7 @@
 
 #include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/corners/refine.hpp"
+#include "naneye/recon/corners/sine_fit.hpp"
 
 namespace naneye::recon {
 
@@ -35,7 +36,7 @@ constexpr double kBayerNoiseCorrelation = 1.9444444444444444 * 1.944444444444444
 double CornerDetector::residual_bound(const SaddleFit& fit, double radius, double misfit) const {
   const double var_n = noise_.variance(fit.shading.valid ? fit.shading.a : 0.0);
   const double side = 2.0 * radius + 1.0;
-  double nu = (fit.weight > 0 ? fit.weight : side * side) - 9.0;
+  double nu = (fit.weight > 0 ? fit.weight : side * side) - (fit.harmonic ? 12.0 : 9.0);
   if (bayer_) nu /= kBayerNoiseCorrelation;
   nu = std::max(nu, 4.0);
   // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
@@ -52,6 +53,10 @@ double CornerDetector::position_se(const SaddleFit& fit) const {
 }
 
 CornerDetector::BlurVerdict CornerDetector::blur_verdict(const SaddleFit& fit, double radius) const {
+  // The harmonic model has no blur to fit and no window to outgrow: it holds the corner or not.
+  if (fit.harmonic) {
+    return position_se(fit) <= settings_.max_position_se_px ? BlurVerdict::held : BlurVerdict::refused;
+  }
   if (fit.sigma < settings_.min_sigma_px) return BlurVerdict::refused;
   if (fit.sigma <= settings_.max_sigma_per_radius * radius) return BlurVerdict::held;
   // A blur beyond the window's +-2.5 sigma: the window is as large as the grid lets it be (a far
@@ -105,6 +110,36 @@ bool CornerDetector::fit_corner(const SaddleInit& init, const EdgeDirections* ed
     }
   }
   return ok;
+}
+
+bool CornerDetector::prefer_harmonic(const Eigen::Vector2d& px, const Eigen::Vector2d& dc,
+                                     const Eigen::Vector2d& dr, int row, int col, int rows, int cols,
+                                     double tolerance_px, SaddleFit& fit, double& radius) {
+  const double spacing = std::min(dc.norm(), dr.norm());
+  if (!(spacing <= settings_.harmonic_max_spacing_px)) return false;
+  // The board's squares reach one step beyond its outer inner corners: on that side the window
+  // keeps half a step clear of where they end (the margin's step, blurred, is no checkerboard).
+  SineInit init;
+  init.px = px;
+  init.step_col = dc;
+  init.step_row = dr;
+  init.extent_col = init.extent_row = settings_.harmonic_window_steps;
+  init.border_extent = std::min(0.5, settings_.harmonic_window_steps);
+  init.border_col_lo = col == 0;
+  init.border_col_hi = col == cols - 1;
+  init.border_row_lo = row == 0;
+  init.border_row_hi = row == rows - 1;
+  SaddleFit h;
+  const bool okh = fit_sine_corner(luma_view(), camera_, *map_, init, 50, tolerance_px, work_.front(), h);
+  // The radius of a square window of as many pixels (the rejection report's figure).
+  const double r = std::max(0.5 * (std::sqrt(h.weight) - 1.0), settings_.min_radius);
+  if (!okh || !fit_acceptable(h, r)) {
+    return false;
+  }
+  if (fit.converged && fit_acceptable(fit, radius) && position_se(fit) <= position_se(h)) return false;
+  fit = h;
+  radius = r;
+  return true;
 }
 
 void CornerDetector::grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols) {
@@ -206,7 +241,9 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       }
       // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
       const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
-      if (!fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i])) {
+      const bool ok = fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i]);
+      double rh = r1;
+      if (!prefer_harmonic(start[i], dc, dr, r, c, out.rows, out.cols, 1e-2, fits[i], rh) && !ok) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }
@@ -230,7 +267,8 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       g1.steps(r, c, dc, dr);
       const double radius = fit_radius(std::min(dc.norm(), dr.norm()));
       const Corner& k = out.corners[i];
-      const double sigma = fitted[i] ? fits[i].sigma : (k.sigma_px > 0 ? k.sigma_px : 0.8);
+      const double sigma =
+          fitted[i] && fits[i].sigma > 0 ? fits[i].sigma : (k.sigma_px > 0 ? k.sigma_px : 0.8);
       SaddleInit again{first[i], fits[i].theta1, fits[i].theta2, sigma};
       if (fitted[i]) {
         again.shading = fits[i].shading;
@@ -240,14 +278,16 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
         again.shading_at = k.px;
       }
       flags[i] = 0;
-      if (!fit_corner(again, &edges_[i], radius, 1e-3, fits[i], flags[i])) {
+      const bool ok = fit_corner(again, &edges_[i], radius, 1e-3, fits[i], flags[i]);
+      radii[i] = radius;
+      if (prefer_harmonic(first[i], dc, dr, r, c, out.rows, out.cols, 1e-3, fits[i], radii[i])) continue;
+      if (!ok) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }
       // The grid's edge directions hold when the pass-1 corners are right to a few hundredths of a
       // pixel; a close board (sharp edges over few pixels) can miss that and leave the fixed-edge
       // fit poor: then free the edges (11 parameters) and keep the better fit.
-      radii[i] = radius;
       if (!fit_acceptable(fits[i], radius)) {
         SaddleFit free_fit;
         std::uint8_t free_flags = 0;

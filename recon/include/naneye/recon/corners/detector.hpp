@@ -132,6 +132,14 @@ struct CornerSettings {
   // this (px; a returned corner is false beyond 0.5 px: 5 standard errors). Such corners, and any
   // corner whose standard error exceeds this, are flagged kCornerFitPoor.
   double max_position_se_px = 0.1;
+  // Boards whose squares are at most this many pixels across (the grid's smaller step) are also fitted
+  // as the blurred checkerboard's fundamental (corners/sine_fit.hpp) over harmonic_window_steps of a
+  // step each side, and the fit whose corner has the smaller standard error among those accepted is
+  // kept. 8 px: at the real sensor's ~1-1.3 px blur the third harmonic there keeps >= 17 % of the
+  // fundamental's amplitude, a misfit the residual test refuses, so larger squares gain nothing
+  // and are left to the X-junction fit alone.
+  double harmonic_max_spacing_px = 8.0;
+  double harmonic_window_steps = 1.25;
   // Grid validation: the RMS of a homography fit from board to undistorted coordinates, in pixels
   // (scaled by fx), and the worst single corner.
   double max_homography_rms_px = 0.5, max_homography_worst_px = 1.5;
@@ -191,6 +199,11 @@ class CornerDetector {
   BlurVerdict blur_verdict(const SaddleFit& fit, double radius) const;
   bool fit_corner(const SaddleInit& init, const EdgeDirections* edges, double radius, double tolerance_px,
                   SaddleFit& fit, std::uint8_t& flags);
+  // A far board's corner: the harmonic fit (see harmonic_max_spacing_px) replaces `fit` when it is
+  // accepted and holds the corner better; `radius` becomes its window's. True when replaced.
+  bool prefer_harmonic(const Eigen::Vector2d& px, const Eigen::Vector2d& dc, const Eigen::Vector2d& dr,
+                       int row, int col, int rows, int cols, double tolerance_px, SaddleFit& fit,
+                       double& radius);
   void grid_edges(const std::array<Eigen::Vector2d, kMaxCorners>& px, int rows, int cols);
   bool validate(const CornerResult& out);
   void luminance_and_noise(const RawImageView& image, int row_lo, int row_hi);

@@ -43,6 +43,22 @@ struct FastFitScratch {
   FastFitScratch();  // sizes every array to kMaxPixels (fixed storage: no heap), picks the kernels
 };
 
+// A fit's window, as load_fit_window leaves it in the work space: n pixels (dx, dy their offsets
+// from the centre pixel (cx, cy) over `half`; yx, yy their local undistorted coordinates y = Jp
+// (x(p) - x0), x0 the centre's undistorted coordinates; val, wt their values and weights, the
+// weights zero beyond n up to a whole 8-float vector). `off` is the start px - centre.
+struct FitWindow {
+  int n = 0, cx = 0, cy = 0, half = 0;
+  bool undistorted = false;  // false: beyond the model's fold, y are raw pixel offsets
+  Eigen::Vector2d x0{0, 0}, off{0, 0};
+  Eigen::Matrix2d Jp = Eigen::Matrix2d::Identity();
+};
+
+// Loads the pixels within `radius` (Chebyshev, from px; a 1 px linear taper beyond) into `w`.
+// False when the window does not fit in the usable area or exceeds the work space.
+bool load_fit_window(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
+                     const Eigen::Vector2d& px, double radius, FastFitScratch& w, FitWindow& win);
+
 // Fits one corner from init.px with the pixels within `radius` (Chebyshev, 1 px taper beyond), like
 // fit_saddle. With `edges` non-null the edge normals are fixed to those directions (mapped to the
 // window's local coordinates) and init.theta1/theta2 are ignored; otherwise all 11 parameters are

@@ -50,6 +50,9 @@ struct SaddleFit {
   // computed). Times the noise variance, the position's variance as least squares gives it
   // (Gauss-Markov): how well this window, this blur and this contrast hold the corner.
   double position_var_per_noise = 0;
+  // Fitted as the blurred checkerboard's fundamental (fit_sine_corner, corners/sine_fit.hpp), not as
+  // one blurred X-junction: sigma and the edge normals are not fitted.
+  bool harmonic = false;
 };
 
 // A read-only float image with the rectangle [col 0, col_end) x [row_begin, row_end) usable.

@@ -1,0 +1,169 @@
+#include "naneye/recon/corners/sine_fit.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace naneye::recon {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kParams = 12;  // qx qy m00 m01 m10 m11 a gx gy b hx hy
+using Vec = Eigen::Matrix<double, kParams, 1>;
+using Mat = Eigen::Matrix<double, kParams, kParams>;
+// The start is a lattice point of the coarse grid or of the first pass (within ~1 px at 4 px
+// squares): a fit that ends more than this share of a step away found the next lattice point, where
+// the model repeats (with b's sign flipped), not this corner.
+constexpr double kMaxMoveSteps = 0.35;
+
+// The weighted cost at p and, when JtJ is non-null, the normal equations (Gauss-Newton) of all 12
+// parameters (the six linear terms are rows 6-11).
+double evaluate(const FastFitScratch& w, int n, const Vec& p, Mat* JtJ, Vec* Jtr) {
+  if (JtJ) {
+    JtJ->setZero();
+    Jtr->setZero();
+  }
+  double cost = 0;
+  Eigen::Matrix<double, kParams, 1> j;
+  for (int i = 0; i < n; ++i) {
+    const double wt = w.wt[i];
+    if (!(wt > 0.0)) continue;
+    const double ex = w.yx[i] - p[0], ey = w.yy[i] - p[1];
+    const double u = p[2] * ex + p[3] * ey, v = p[4] * ex + p[5] * ey;
+    const double su = std::sin(kPi * u), cu = std::cos(kPi * u);
+    const double sv = std::sin(kPi * v), cv = std::cos(kPi * v);
+    const double dx = w.dx[i], dy = w.dy[i];
+    const double S = su * sv;
+    const double B = p[9] + p[10] * dx + p[11] * dy;
+    const double r = p[6] + p[7] * dx + p[8] * dy + B * S - w.val[i];
+    cost += wt * r * r;
+    if (!JtJ) continue;
+    const double Su = B * kPi * cu * sv, Sv = B * kPi * su * cv;  // d model / du, d model / dv
+    j << -(Su * p[2] + Sv * p[4]), -(Su * p[3] + Sv * p[5]), Su * ex, Su * ey, Sv * ex, Sv * ey, 1.0, dx, dy,
+        S, dx * S, dy * S;
+    JtJ->selfadjointView<Eigen::Upper>().rankUpdate(j, wt);
+    *Jtr += (wt * r) * j;
+  }
+  if (JtJ) *JtJ = JtJ->selfadjointView<Eigen::Upper>();
+  return cost;
+}
+
+}  // namespace
+
+bool fit_sine_corner(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
+                     const SineInit& init, int max_iterations, double tolerance_px, FastFitScratch& w,
+                     SaddleFit& out) {
+  out = SaddleFit{};
+  out.harmonic = true;
+  // The steps in local coordinates: y ~ p - c to first order, and M is fitted anyway.
+  Eigen::Matrix2d steps;
+  steps << init.step_col, init.step_row;
+  if (std::abs(steps.determinant()) < 1.0) return false;  // a cell under 1 px^2: no grid
+  const Eigen::Matrix2d M0 = steps.inverse();
+  const double min_step = std::min(init.step_col.norm(), init.step_row.norm());
+  double u_lo = init.border_col_lo ? init.border_extent : init.extent_col;
+  double u_hi = init.border_col_hi ? init.border_extent : init.extent_col;
+  double v_lo = init.border_row_lo ? init.border_extent : init.extent_row;
+  double v_hi = init.border_row_hi ? init.border_extent : init.extent_row;
+  // The pixel window that holds the grid window: its parallelogram's farthest corner; a grid
+  // window beyond the work space is shrunk to fit it (squares of 6-8 px seen at an angle).
+  const Eigen::Vector2d reach =
+      (init.step_col * std::max(u_lo, u_hi)).cwiseAbs() + (init.step_row * std::max(v_lo, v_hi)).cwiseAbs();
+  constexpr double kMaxRadius = FastFitScratch::kMaxHalf - 1;
+  if (reach.maxCoeff() > kMaxRadius) {
+    const double shrink = kMaxRadius / reach.maxCoeff();
+    u_lo *= shrink;
+    u_hi *= shrink;
+    v_lo *= shrink;
+    v_hi *= shrink;
+  }
+  const double radius = std::clamp(reach.maxCoeff(), 1.5, kMaxRadius);
+  FitWindow win;
+  if (!load_fit_window(img, cam, map, init.px, radius, w, win)) return false;
+  const int n = win.n;
+  {
+    // The grid window's taper, 1 px wide along each axis, from the start's geometry (fixed during
+    // the fit, so that its cost stays one function).
+    const double len_col = init.step_col.norm(), len_row = init.step_row.norm();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d uv = M0 * (Eigen::Vector2d(w.yx[i], w.yy[i]) - win.off);
+      const double eu = uv.x() < 0 ? u_lo : u_hi, ev = uv.y() < 0 ? v_lo : v_hi;
+      const double tu = std::clamp((eu - std::abs(uv.x())) * len_col + 0.5, 0.0, 1.0);
+      const double tv = std::clamp((ev - std::abs(uv.y())) * len_row + 0.5, 0.0, 1.0);
+      w.wt[i] = static_cast<float>(w.wt[i] * tu * tv);
+    }
+  }
+
+  Vec p = Vec::Zero();
+  p << win.off.x(), win.off.y(), M0(0, 0), M0(0, 1), M0(1, 0), M0(1, 1), 0, 0, 0, 0, 0, 0;
+  // The six linear terms for the start's geometry: one linear least-squares solve.
+  {
+    Mat JtJ;
+    Vec Jtr;
+    evaluate(w, n, p, &JtJ, &Jtr);
+    Eigen::Matrix<double, 6, 6> A = JtJ.block<6, 6>(6, 6);
+    A.diagonal().array() += 1e-9 * (A.diagonal().maxCoeff() + 1.0);
+    p.segment<6>(6) -= A.ldlt().solve(Jtr.segment<6>(6));
+  }
+  Mat JtJ, JtJ2;
+  Vec Jtr, Jtr2;
+  double cost = evaluate(w, n, p, &JtJ, &Jtr);
+  double lambda = 1e-3;
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    Mat A = JtJ;
+    A.diagonal() += lambda * JtJ.diagonal().cwiseMax(1e-12);
+    const Vec step = -A.ldlt().solve(Jtr);
+    if (!step.allFinite()) break;
+    const Vec cand = p + step;
+    const double c2 = evaluate(w, n, cand, &JtJ2, &Jtr2);
+    if (c2 < cost) {
+      p = cand;
+      JtJ = JtJ2;
+      Jtr = Jtr2;
+      cost = c2;
+      lambda = std::max(lambda * 0.2, 1e-9);
+      if (step.head<2>().norm() < tolerance_px) break;
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e8) break;
+    }
+  }
+  out.iterations = it + 1;
+  const double used = static_cast<double>(w.wt.head(n).sum());
+  const Mat inv = JtJ.ldlt().solve(Mat::Identity());
+  const Eigen::Matrix2d cq = inv.topLeftCorner<2, 2>();
+  const double mid = 0.5 * (cq(0, 0) + cq(1, 1)), det = cq.determinant();
+  const double position_var = mid + std::sqrt(std::max(mid * mid - det, 0.0));
+  out.contrast = std::abs(p[9]);
+  out.rms = std::sqrt(cost / std::max(1.0, used));
+  out.weight = used;
+  out.position_var_per_noise = std::isfinite(position_var) ? position_var : 1e30;
+  out.undistorted = win.undistorted;
+  const Eigen::Vector2d q(p[0], p[1]);
+  if (!p.allFinite() || (q - win.off).norm() > kMaxMoveSteps * min_step) return false;
+  Eigen::Matrix2d M;
+  M << p[2], p[3], p[4], p[5];
+  // The fitted steps must stay a grid cell of the start's (the lattice, not one of its harmonics).
+  const Eigen::Matrix2d fitted_steps = M.inverse();
+  if (!fitted_steps.allFinite() || (fitted_steps - steps).norm() > 0.5 * min_step) return false;
+  out.theta1 = std::atan2(fitted_steps(1, 0), fitted_steps(0, 0)) + 0.5 * kPi;
+  out.theta2 = std::atan2(fitted_steps(1, 1), fitted_steps(0, 1)) + 0.5 * kPi;
+  const Eigen::Vector2d centre(win.cx, win.cy);
+  out.px = win.undistorted ? cam.to_pixel(cam.distort(win.x0 + win.Jp.inverse() * q)) : centre + q;
+  // The linear terms referred to the corner, gradients per raw pixel (as fit_saddle_fast's).
+  const double h = win.half;
+  const Eigen::Vector2d d = (out.px - centre) / h;
+  out.shading = SaddleShading{p[6] + p[7] * d.x() + p[8] * d.y(),
+                              p[7] / h,
+                              p[8] / h,
+                              p[9] + p[10] * d.x() + p[11] * d.y(),
+                              p[10] / h,
+                              p[11] / h,
+                              true};
+  out.converged = true;
+  return true;
+}
+
+}  // namespace naneye::recon
