@@ -255,11 +255,13 @@ class CornerDetector {
 // With `balance` valid, a Bayer mosaic's sites are first mapped to G-equivalent values (white
 // balance from the frame itself, estimate_cfa_balance) so that the luminance is a grey board's
 // whatever the channel gains; `scratch` then holds that balanced mosaic (the noise is measured on it).
-// `textured`: the frame shows a textured scene, not a board. A board is flat but for its edges, so
-// a pixel beyond all its same-site neighbours is a defect; texture seen through a sharp lens puts
-// such extremes on ~0.5 % of a Bayer frame's pixels (same-site neighbours are 2 px apart), so a
-// defect must then also stand apart from its immediate neighbours brought to its colour (luma.cpp,
-// apart_from_its_texture). Hot, dead and stuck pixels still do.
+// `textured`: the frame may hold detail at the scale of the same-site spacing (2 px on a Bayer
+// mosaic): texture seen through a sharp lens puts extremes beyond all same-site neighbours on ~0.5 %
+// of a Bayer frame's pixels, and a far board's squares of ~4 px put every square's centre there (its
+// same-site neighbours lie on the square's edges and corners), so a defect must then also stand
+// apart from its immediate neighbours brought to its colour (luma.cpp, apart_from_its_texture). Hot,
+// dead and stuck pixels still do. The corner detector and the scene paths set it; false keeps the
+// same-site test alone (a board whose squares are many blurs across).
 void raw_to_luminance(const RawImageView& image, float* out, float* scratch,
                       float defect_threshold_dn = kDefectThresholdDn, int row_lo = 0, int row_hi = -1,
                       const CfaBalance* balance = nullptr, bool textured = false);
