@@ -241,9 +241,11 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
       }
       // Pass 1 only has to land within a few hundredths of a pixel: a small window is enough.
       const double r1 = std::min(fit_radius(std::min(dc.norm(), dr.norm())), settings_.first_pass_radius);
-      const bool ok = fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i]);
+      // A far board's harmonic fit, when accepted, lands it as well (pass 2 compares the two fits).
       double rh = r1;
-      if (!prefer_harmonic(start[i], dc, dr, r, c, out.rows, out.cols, 1e-2, fits[i], rh) && !ok) {
+      fits[i] = SaddleFit{};
+      if (!prefer_harmonic(start[i], dc, dr, r, c, out.rows, out.cols, 1e-2, fits[i], rh) &&
+          !fit_corner(init, from_previous ? &edges_[i] : nullptr, r1, 1e-2, fits[i], flags[i])) {
         failure_ = CornerFailure::fit_failed;
         return false;
       }

@@ -17,35 +17,53 @@ using Mat = Eigen::Matrix<double, kParams, kParams>;
 // the model repeats (with b's sign flipped), not this corner.
 constexpr double kMaxMoveSteps = 0.35;
 
+// The weighted Jacobian of one window, one column per parameter (fixed capacity: no heap).
+using Jac =
+    Eigen::Matrix<float, Eigen::Dynamic, kParams, Eigen::ColMajor, FastFitScratch::kMaxPixels, kParams>;
+
 // The weighted cost at p and, when JtJ is non-null, the normal equations (Gauss-Newton) of all 12
-// parameters (the six linear terms are rows 6-11).
-double evaluate(const FastFitScratch& w, int n, const Vec& p, Mat* JtJ, Vec* Jtr) {
-  if (JtJ) {
-    JtJ->setZero();
-    Jtr->setZero();
-  }
-  double cost = 0;
-  Eigen::Matrix<double, kParams, 1> j;
-  for (int i = 0; i < n; ++i) {
-    const double wt = w.wt[i];
-    if (!(wt > 0.0)) continue;
-    const double ex = w.yx[i] - p[0], ey = w.yy[i] - p[1];
-    const double u = p[2] * ex + p[3] * ey, v = p[4] * ex + p[5] * ey;
-    const double su = std::sin(kPi * u), cu = std::cos(kPi * u);
-    const double sv = std::sin(kPi * v), cv = std::cos(kPi * v);
-    const double dx = w.dx[i], dy = w.dy[i];
-    const double S = su * sv;
-    const double B = p[9] + p[10] * dx + p[11] * dy;
-    const double r = p[6] + p[7] * dx + p[8] * dy + B * S - w.val[i];
-    cost += wt * r * r;
-    if (!JtJ) continue;
-    const double Su = B * kPi * cu * sv, Sv = B * kPi * su * cv;  // d model / du, d model / dv
-    j << -(Su * p[2] + Sv * p[4]), -(Su * p[3] + Sv * p[5]), Su * ex, Su * ey, Sv * ex, Sv * ey, 1.0, dx, dy,
-        S, dx * S, dy * S;
-    JtJ->selfadjointView<Eigen::Upper>().rankUpdate(j, wt);
-    *Jtr += (wt * r) * j;
-  }
-  if (JtJ) *JtJ = JtJ->selfadjointView<Eigen::Upper>();
+// parameters (the six linear terms are rows 6-11). In float over the window's arrays, as
+// fit_saddle_fast is (Eigen vectorises the sines and cosines): the corner's precision needs ~1e-3
+// px of a few-px window, far inside float's 1e-7.
+double evaluate(FastFitScratch& w, int n, const Vec& p, Jac& J, Mat* JtJ, Vec* Jtr) {
+  constexpr float kPiF = static_cast<float>(kPi);
+  const auto pf = p.cast<float>();
+  const auto ex = w.yx.head(n) - pf[0], ey = w.yy.head(n) - pf[1];
+  auto u = w.U1.head(n), v = w.U2.head(n);  // pi u, pi v
+  u = kPiF * (pf[2] * ex + pf[3] * ey);
+  v = kPiF * (pf[4] * ex + pf[5] * ey);
+  auto su = w.E1.head(n), cu = w.E2.head(n), sv = w.G1.head(n), cv = w.G2.head(n);
+  su = u.sin();
+  cu = u.cos();
+  sv = v.sin();
+  cv = v.cos();
+  const auto dx = w.dx.head(n), dy = w.dy.head(n);
+  auto S = w.S.head(n), r = w.r.head(n);
+  S = su * sv;
+  r = pf[6] + pf[7] * dx + pf[8] * dy + (pf[9] + pf[10] * dx + pf[11] * dy) * S - w.val.head(n);
+  const double cost = static_cast<double>((w.wt.head(n) * r.square()).sum());
+  if (!JtJ) return cost;
+  // Columns scaled by sqrt(wt), so that J' J is the weighted normal matrix.
+  auto sw = w.Jw[0].head(n), swB = w.Jw[1].head(n), Su = w.Jw[2].head(n), Sv = w.Jw[3].head(n);
+  sw = w.wt.head(n).sqrt();
+  swB = sw * (pf[9] + pf[10] * dx + pf[11] * dy) * kPiF;
+  Su = swB * cu * sv;  // sqrt(wt) d model / du
+  Sv = swB * su * cv;
+  J.resize(n, kParams);
+  J.col(0) = -(Su * pf[2] + Sv * pf[4]).matrix();
+  J.col(1) = -(Su * pf[3] + Sv * pf[5]).matrix();
+  J.col(2) = (Su * ex).matrix();
+  J.col(3) = (Su * ey).matrix();
+  J.col(4) = (Sv * ex).matrix();
+  J.col(5) = (Sv * ey).matrix();
+  J.col(6) = sw.matrix();
+  J.col(7) = (sw * dx).matrix();
+  J.col(8) = (sw * dy).matrix();
+  J.col(9) = (sw * S).matrix();
+  J.col(10) = (sw * dx * S).matrix();
+  J.col(11) = (sw * dy * S).matrix();
+  *JtJ = J.transpose().lazyProduct(J).cast<double>();  // coefficient-wise: no GEMM packing for 12 x 12
+  *Jtr = (J.transpose() * (sw * r).matrix()).cast<double>();
   return cost;
 }
 
@@ -95,20 +113,21 @@ bool fit_sine_corner(const LumaView& img, const CameraModel& cam, const Undistor
     }
   }
 
+  Jac rows;
   Vec p = Vec::Zero();
   p << win.off.x(), win.off.y(), M0(0, 0), M0(0, 1), M0(1, 0), M0(1, 1), 0, 0, 0, 0, 0, 0;
   // The six linear terms for the start's geometry: one linear least-squares solve.
   {
     Mat JtJ;
     Vec Jtr;
-    evaluate(w, n, p, &JtJ, &Jtr);
+    evaluate(w, n, p, rows, &JtJ, &Jtr);
     Eigen::Matrix<double, 6, 6> A = JtJ.block<6, 6>(6, 6);
     A.diagonal().array() += 1e-9 * (A.diagonal().maxCoeff() + 1.0);
     p.segment<6>(6) -= A.ldlt().solve(Jtr.segment<6>(6));
   }
   Mat JtJ, JtJ2;
   Vec Jtr, Jtr2;
-  double cost = evaluate(w, n, p, &JtJ, &Jtr);
+  double cost = evaluate(w, n, p, rows, &JtJ, &Jtr);
   double lambda = 1e-3;
   int it = 0;
   for (; it < max_iterations; ++it) {
@@ -117,7 +136,7 @@ bool fit_sine_corner(const LumaView& img, const CameraModel& cam, const Undistor
     const Vec step = -A.ldlt().solve(Jtr);
     if (!step.allFinite()) break;
     const Vec cand = p + step;
-    const double c2 = evaluate(w, n, cand, &JtJ2, &Jtr2);
+    const double c2 = evaluate(w, n, cand, rows, &JtJ2, &Jtr2);
     if (c2 < cost) {
       p = cand;
       JtJ = JtJ2;
