@@ -144,25 +144,33 @@ TEST(Conditions, CloseClippedBoardsWithoutASaddleAreFound) {
   check_conditions("close at 36-50 mm, exposure for 70 mm", PairSource{1212, 4000, 5});
 }
 
-// Squares of ~4-6 px: not all found yet (nor by OpenCV), but never a false corner.
+// Squares of ~4-6 px: not all found yet (nor by OpenCV, which finds none), but never a false corner.
 TEST(Conditions, FarBoardsGiveNoFalseCorners) {
   check_conditions("far: ");
 }
 
-// Squares of ~5 px (200-260 mm): bench_conditions' pairs found since this session's changes, all
-// refused before (docs/corners.md, "Far boards"). Mono pair 6 and Bayer pair 6 had no grid: the
-// lattice's quadrant test sampled 0.35 of the diagonal, < 2.5 px from the corner, and gave no sign;
-// it now samples the squares' centres. Bayer pair 1 (right eye) and then mono pair 4 and Bayer pair 6
-// were refused for a blur of 1.1-1.2 px beyond 0.4 x their 2.6-3.1 px windows: now accepted, flagged,
-// when the fit holds the corner to the noise (position standard error <= 0.1 px). Their windows hold
-// the neighbouring lines' blur, which the one-junction model does not have: unflagged corners within
-// 0.35 px (measured over the bench's 12 pairs: RMS 0.085 px, worst 0.29 px), short of a false corner
-// (0.5 px).
+// Squares of ~5 px (200-260 mm): bench_conditions' pairs (docs/corners.md, "Far boards"). Mono 4 and
+// 6, Bayer 1 and 6 were found since session 5 with the X-junction fit, flagged where its window held
+// the next lines' blur (0.085 px RMS, worst 0.29 px); mono 0 and 8 and Bayer 0 were refused
+// (fit_rejected) until the harmonic fit (corners/sine_fit.hpp), which models the whole window: now
+// the ordinary bounds on unflagged corners (over the bench's 12 pairs: 0.037 / 0.033 px RMS, worst
+// 0.14 / 0.12 px, mono / Bayer).
 TEST(Conditions, FarBoardsAreFound) {
   check_condition(test::imaging_conditions().at(condition_index("far: squares ~5-6 px (200-260 mm), mono")),
-                  PairSource{1212, 4000, 7, {4, 6}, true, 0.35, 0.12});
+                  PairSource{1212, 4000, 9, {0, 4, 6, 8}, true});
   check_condition(test::imaging_conditions().at(condition_index("far: squares ~5-6 px (200-260 mm), Bayer")),
-                  PairSource{1212, 4000, 7, {1, 6}, true, 0.35, 0.12});
+                  PairSource{1212, 4000, 7, {0, 1, 6}, true});
+}
+
+// Squares of ~4 px (300-340 mm): no window held an X-junction alone (mono: fit_rejected in every eye)
+// and the Bayer luminance's defect test flattened the squares' centres (no_grid in every eye); the
+// harmonic fit and the textured defect test find 11 and 9 of the bench's 12 pairs (0.032 / 0.041 px
+// RMS, worst 0.13 / 0.19 px). Two of each here.
+TEST(Conditions, SmallestSquaresAreFound) {
+  check_condition(test::imaging_conditions().at(condition_index("far: squares ~4 px (300-340 mm), mono")),
+                  PairSource{1212, 4000, 2, {}, true});
+  check_condition(test::imaging_conditions().at(condition_index("far: squares ~4 px (300-340 mm), Bayer")),
+                  PairSource{1212, 4000, 3, {1, 2}, true});
 }
 
 TEST(Conditions, NoBoardUnderTheRealSensorGivesNothing) {
