@@ -36,7 +36,7 @@ constexpr double kBayerNoiseCorrelation = 1.9444444444444444 * 1.944444444444444
 double CornerDetector::residual_bound(const SaddleFit& fit, double radius, double misfit) const {
   const double var_n = noise_.variance(fit.shading.valid ? fit.shading.a : 0.0);
   const double side = 2.0 * radius + 1.0;
-  double nu = (fit.weight > 0 ? fit.weight : side * side) - (fit.harmonic ? 12.0 : 9.0);
+  double nu = (fit.weight > 0 ? fit.weight : side * side) - (fit.harmonic ? 13.0 : 9.0);
   if (bayer_) nu /= kBayerNoiseCorrelation;
   nu = std::max(nu, 4.0);
   // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.

@@ -9,7 +9,7 @@ namespace naneye::recon {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kParams = 12;  // qx qy m00 m01 m10 m11 a gx gy b hx hy
+constexpr int kParams = 13;  // qx qy m00 m01 m10 m11 a gx gy b hx hy c
 using Vec = Eigen::Matrix<double, kParams, 1>;
 using Mat = Eigen::Matrix<double, kParams, kParams>;
 // The start is a lattice point of the coarse grid or of the first pass (within ~1 px at 4 px
@@ -40,15 +40,17 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, Jac& J, Mat* JtJ, Vec* J
   const auto dx = w.dx.head(n), dy = w.dy.head(n);
   auto S = w.S.head(n), r = w.r.head(n);
   S = su * sv;
-  r = pf[6] + pf[7] * dx + pf[8] * dy + (pf[9] + pf[10] * dx + pf[11] * dy) * S - w.val.head(n);
+  auto C = w.Jw[4].head(n);
+  C = cu * cv;
+  r = pf[6] + pf[7] * dx + pf[8] * dy + (pf[9] + pf[10] * dx + pf[11] * dy) * S + pf[12] * C - w.val.head(n);
   const double cost = static_cast<double>((w.wt.head(n) * r.square()).sum());
   if (!JtJ) return cost;
   // Columns scaled by sqrt(wt), so that J' J is the weighted normal matrix.
   auto sw = w.Jw[0].head(n), swB = w.Jw[1].head(n), Su = w.Jw[2].head(n), Sv = w.Jw[3].head(n);
   sw = w.wt.head(n).sqrt();
   swB = sw * (pf[9] + pf[10] * dx + pf[11] * dy) * kPiF;
-  Su = swB * cu * sv;  // sqrt(wt) d model / du
-  Sv = swB * su * cv;
+  Su = swB * cu * sv - (kPiF * pf[12]) * sw * su * cv;  // sqrt(wt) d model / du
+  Sv = swB * su * cv - (kPiF * pf[12]) * sw * cu * sv;
   J.resize(n, kParams);
   J.col(0) = -(Su * pf[2] + Sv * pf[4]).matrix();
   J.col(1) = -(Su * pf[3] + Sv * pf[5]).matrix();
@@ -62,6 +64,7 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, Jac& J, Mat* JtJ, Vec* J
   J.col(9) = (sw * S).matrix();
   J.col(10) = (sw * dx * S).matrix();
   J.col(11) = (sw * dy * S).matrix();
+  J.col(12) = (sw * C).matrix();
   *JtJ = J.transpose().lazyProduct(J).cast<double>();  // coefficient-wise: no GEMM packing for 12 x 12
   *Jtr = (J.transpose() * (sw * r).matrix()).cast<double>();
   return cost;
@@ -115,15 +118,15 @@ bool fit_sine_corner(const LumaView& img, const CameraModel& cam, const Undistor
 
   Jac rows;
   Vec p = Vec::Zero();
-  p << win.off.x(), win.off.y(), M0(0, 0), M0(0, 1), M0(1, 0), M0(1, 1), 0, 0, 0, 0, 0, 0;
+  p << win.off.x(), win.off.y(), M0(0, 0), M0(0, 1), M0(1, 0), M0(1, 1), 0, 0, 0, 0, 0, 0, 0;
   // The six linear terms for the start's geometry: one linear least-squares solve.
   {
     Mat JtJ;
     Vec Jtr;
     evaluate(w, n, p, rows, &JtJ, &Jtr);
-    Eigen::Matrix<double, 6, 6> A = JtJ.block<6, 6>(6, 6);
+    Eigen::Matrix<double, 7, 7> A = JtJ.block<7, 7>(6, 6);
     A.diagonal().array() += 1e-9 * (A.diagonal().maxCoeff() + 1.0);
-    p.segment<6>(6) -= A.ldlt().solve(Jtr.segment<6>(6));
+    p.segment<7>(6) -= A.ldlt().solve(Jtr.segment<7>(6));
   }
   Mat JtJ, JtJ2;
   Vec Jtr, Jtr2;
