@@ -316,6 +316,33 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
   const double frame_misfit =
       std::clamp(2.0 * misfit[n / 2], settings_.model_misfit, 2.0 * settings_.model_misfit);
   const double poor_misfit = std::max(settings_.poor_misfit, settings_.poor_per_median * misfit[n / 2]);
+  // A border corner's outer squares may end within its window: cut by the print (OpenCV's sample
+  // board's outer columns are half squares), the image edge or the fold, so the window holds the
+  // margin's edge, which the model has not. Where such a corner's fit is refused, smaller windows,
+  // 1 px at a time, until one holds (on that set reduced to squares of 6-11 px every board was
+  // refused at a border corner with windows of 0.55 of the spacing).
+  for (std::size_t i = 0; i < n; ++i) {
+    const int r = static_cast<int>(i) / out.cols, c = static_cast<int>(i) % out.cols;
+    const bool border = r == 0 || c == 0 || r == out.rows - 1 || c == out.cols - 1;
+    auto holds = [&](const SaddleFit& f, double rad) {
+      return f.rms * f.rms <= residual_bound(f, rad, frame_misfit) &&
+             blur_verdict(f, rad) != BlurVerdict::refused;
+    };
+    if (!border || fits[i].harmonic || holds(fits[i], radii[i])) continue;
+    SaddleInit again{fits[i].px, fits[i].theta1, fits[i].theta2, fits[i].sigma > 0 ? fits[i].sigma : 0.8};
+    again.shading = fits[i].shading;
+    again.shading_at = fits[i].px;
+    for (double rad = radii[i] - 1.0; rad >= settings_.min_radius; rad -= 1.0) {
+      SaddleFit small;
+      std::uint8_t small_flags = 0;
+      if (fit_corner(again, &edges_[i], rad, 1e-3, small, small_flags) && holds(small, rad)) {
+        fits[i] = small;
+        flags[i] = small_flags;
+        radii[i] = rad;
+        break;
+      }
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const SaddleFit& fit = fits[i];
     const double var_n = noise_.variance(fit.shading.a);
