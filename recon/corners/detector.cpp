@@ -351,6 +351,34 @@ bool CornerDetector::full_search(CornerResult& out) {
     canonical_order(out);
     if (refine_all(out, false) && validate(out)) {
       out.found = true;
+      // A board of squares only a few pixels across (fitted as the checkerboard's fundamental) may
+      // be a picture of a board beside the real one (OpenCV's left01 shows one on a monitor, squares
+      // of ~4 px, found before the held board once such boards could be fitted): the search goes on,
+      // and a further board whose corners are better measured (mean standard error) is the one
+      // returned. Boards of ordinary squares return at once, as before.
+      if (!harmonic_used_ || from_opencv) return true;
+      auto mean_se = [](const CornerResult& r) {
+        double sum = 0;
+        for (int i = 0; i < r.count; ++i) sum += r.corners[static_cast<std::size_t>(i)].position_se_px;
+        return sum / std::max(r.count, 1);
+      };
+      const CornerResult small = out;
+      while (coarse_finder_.find_next(coarse_.data())) {
+        out.count = settings_.board.rows * settings_.board.cols;
+        for (int i = 0; i < out.count; ++i) {
+          Corner& c = out.corners[static_cast<std::size_t>(i)];
+          c = Corner{};
+          c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
+        }
+        canonical_order(out);
+        if (refine_all(out, false) && validate(out) && mean_se(out) < mean_se(small)) {
+          out.found = true;
+          failure_ = CornerFailure::none;
+          return true;
+        }
+      }
+      out = small;
+      failure_ = CornerFailure::none;
       return true;
     }
     out.count = 0;

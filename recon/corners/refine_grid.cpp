@@ -139,6 +139,7 @@ bool CornerDetector::prefer_harmonic(const Eigen::Vector2d& px, const Eigen::Vec
   if (fit.converged && fit_acceptable(fit, radius) && position_se(fit) <= position_se(h)) return false;
   fit = h;
   radius = r;
+  harmonic_used_ = true;
   return true;
 }
 
@@ -204,6 +205,7 @@ bool affine_motion(const std::array<Eigen::Vector2d, kMaxCorners>& prev,
 }  // namespace
 
 bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
+  harmonic_used_ = false;
   constexpr double kHalfPi = 1.57079632679489661923;
   const std::size_t n = static_cast<std::size_t>(out.count);
   std::array<Eigen::Vector2d, kMaxCorners> start, first;

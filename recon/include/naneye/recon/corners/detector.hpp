@@ -241,7 +241,8 @@ class CornerDetector {
   std::vector<CornerDetector> half_;
   std::vector<std::uint16_t> half_raw_;
   CornerResult half_result_, half_previous_;
-  bool from_half_ = false;  // the last board was found at the next level: track there first
+  bool from_half_ = false;      // the last board was found at the next level: track there first
+  bool harmonic_used_ = false;  // the last refine_all fitted a corner as the fundamental (sine_fit)
 };
 
 // The luminance of a raw frame, without moving any edge: mono is copied; GRBG Bayer is filtered
