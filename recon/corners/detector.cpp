@@ -341,7 +341,7 @@ bool CornerDetector::full_search(CornerResult& out) {
   // the lattice search goes on. The first refusal is what last_failure() reports when none passes.
   CornerFailure first_failure = CornerFailure::none;
   CornerRejection first_rejection;
-  while (found) {
+  auto from_coarse = [&] {
     out.count = settings_.board.rows * settings_.board.cols;
     for (int i = 0; i < out.count; ++i) {
       Corner& c = out.corners[static_cast<std::size_t>(i)];
@@ -349,6 +349,9 @@ bool CornerDetector::full_search(CornerResult& out) {
       c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
     }
     canonical_order(out);
+  };
+  while (found) {
+    from_coarse();
     if (refine_all(out, false) && validate(out)) {
       out.found = true;
       // A board of squares only a few pixels across (fitted as the checkerboard's fundamental) may
@@ -364,13 +367,7 @@ bool CornerDetector::full_search(CornerResult& out) {
       };
       const CornerResult small = out;
       while (coarse_finder_.find_next(coarse_.data())) {
-        out.count = settings_.board.rows * settings_.board.cols;
-        for (int i = 0; i < out.count; ++i) {
-          Corner& c = out.corners[static_cast<std::size_t>(i)];
-          c = Corner{};
-          c.px = coarse_[static_cast<std::size_t>(i)].cast<double>();
-        }
-        canonical_order(out);
+        from_coarse();
         if (refine_all(out, false) && validate(out) && mean_se(out) < mean_se(small)) {
           out.found = true;
           failure_ = CornerFailure::none;

@@ -302,7 +302,7 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   if (!load_fit_window(img, cam, map, init.px, radius, w, win)) return false;
   const int n = win.n, cx = win.cx, cy = win.cy, half = win.half;
   const bool undist = win.undistorted;
-  const Eigen::Vector2d x0 = win.x0, off = win.off;
+  const Eigen::Vector2d off = win.off;
   const Eigen::Matrix2d Jp = win.Jp;
   float *wyx = w.yx.data(), *wyy = w.yy.data(), *wt = w.wt.data();
 
@@ -398,22 +398,24 @@ bool fit_saddle_fast(const LumaView& img, const CameraModel& cam, const Undistor
   const Eigen::Vector2d q(p[0], p[1]);
   if (!p.allFinite() || q.cwiseAbs().maxCoeff() > half) return false;
   if (std::abs(std::sin(p[2] - p[3])) < 0.3) return false;  // edges (nearly) parallel: not a corner
-  if (undist) {
-    out.px = cam.to_pixel(cam.distort(x0 + Jp.inverse() * q));
-  } else {
-    out.px = Eigen::Vector2d(cx, cy) + q;
-  }
-  // The linear terms referred to the corner, gradients per raw pixel.
-  const Eigen::Vector2d d = (out.px - centre) / h;
-  out.shading = SaddleShading{p[5] + p[6] * d.x() + p[7] * d.y(),
-                              p[6] / h,
-                              p[7] / h,
-                              p[8] + p[9] * d.x() + p[10] * d.y(),
-                              p[9] / h,
-                              p[10] / h,
-                              true};
+  place_corner(win, cam, q, p.data() + 5, out);
   out.converged = true;
   return true;
+}
+
+void place_corner(const FitWindow& win, const CameraModel& cam, const Eigen::Vector2d& q, const double* lin,
+                  SaddleFit& out) {
+  const Eigen::Vector2d centre(win.cx, win.cy);
+  out.px = win.undistorted ? cam.to_pixel(cam.distort(win.x0 + win.Jp.inverse() * q)) : centre + q;
+  const double h = win.half;
+  const Eigen::Vector2d d = (out.px - centre) / h;
+  out.shading = SaddleShading{lin[0] + lin[1] * d.x() + lin[2] * d.y(),
+                              lin[1] / h,
+                              lin[2] / h,
+                              lin[3] + lin[4] * d.x() + lin[5] * d.y(),
+                              lin[4] / h,
+                              lin[5] / h,
+                              true};
 }
 
 }  // namespace naneye::recon

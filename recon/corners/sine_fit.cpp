@@ -172,18 +172,7 @@ bool fit_sine_corner(const LumaView& img, const CameraModel& cam, const Undistor
   if (!fitted_steps.allFinite() || (fitted_steps - steps).norm() > 0.5 * min_step) return false;
   out.theta1 = std::atan2(fitted_steps(1, 0), fitted_steps(0, 0)) + 0.5 * kPi;
   out.theta2 = std::atan2(fitted_steps(1, 1), fitted_steps(0, 1)) + 0.5 * kPi;
-  const Eigen::Vector2d centre(win.cx, win.cy);
-  out.px = win.undistorted ? cam.to_pixel(cam.distort(win.x0 + win.Jp.inverse() * q)) : centre + q;
-  // The linear terms referred to the corner, gradients per raw pixel (as fit_saddle_fast's).
-  const double h = win.half;
-  const Eigen::Vector2d d = (out.px - centre) / h;
-  out.shading = SaddleShading{p[6] + p[7] * d.x() + p[8] * d.y(),
-                              p[7] / h,
-                              p[8] / h,
-                              p[9] + p[10] * d.x() + p[11] * d.y(),
-                              p[10] / h,
-                              p[11] / h,
-                              true};
+  place_corner(win, cam, q, p.data() + 6, out);
   out.converged = true;
   return true;
 }

@@ -59,6 +59,12 @@ struct FitWindow {
 bool load_fit_window(const LumaView& img, const CameraModel& cam, const UndistortMap& map,
                      const Eigen::Vector2d& px, double radius, FastFitScratch& w, FitWindow& win);
 
+// A fit's last step: the corner q (local coordinates of `win`) back to raw pixels in out.px, and the
+// linear terms lin = (a, gx, gy, b, hx, hy), gradients per window half size at the window's centre,
+// referred to that corner with gradients per raw pixel in out.shading.
+void place_corner(const FitWindow& win, const CameraModel& cam, const Eigen::Vector2d& q, const double* lin,
+                  SaddleFit& out);
+
 // Fits one corner from init.px with the pixels within `radius` (Chebyshev, 1 px taper beyond), like
 // fit_saddle. With `edges` non-null the edge normals are fixed to those directions (mapped to the
 // window's local coordinates) and init.theta1/theta2 are ignored; otherwise all 11 parameters are
