@@ -220,7 +220,7 @@ void CornerDetector::luminance_and_noise(const RawImageView& image, int row_lo, 
   if (!keep) balance_ = bayer_ ? estimate_cfa_balance(image, row_lo, hi) : CfaBalance{};
   // The defect test of textured frames: the same-site rule alone took the centres of a far board's
   // 4 px squares for hot pixels and flattened them (bench_conditions' 4 px Bayer row: no grid in
-  // any eye; 9 of 12 pairs found with this rule, every other row the same within 0.0004 px RMS).
+  // any eye; 9 of 12 pairs found with this rule, every other row the same within 0.0002 px RMS).
   raw_to_luminance(image, luma_.data(), scratch_.data(), kDefectThresholdDn, row_lo, row_hi, &balance_,
                    /*textured=*/true);
   // The noise of the (balanced) mosaic, then of the luminance: the 3 x 3 binomial's weights
@@ -355,7 +355,7 @@ bool CornerDetector::full_search(CornerResult& out) {
     if (refine_all(out, false) && validate(out)) {
       out.found = true;
       // A board of squares only a few pixels across (fitted as the checkerboard's fundamental) may
-      // be a picture of a board beside the real one (OpenCV's left01 shows one on a monitor, squares
+      // be a picture of a board beside the real one (OpenCV's left04 shows one on a monitor, squares
       // of ~4 px, found before the held board once such boards could be fitted): the search goes on,
       // and a further board whose corners are better measured (mean standard error) is the one
       // returned. Boards of ordinary squares return at once, as before.
