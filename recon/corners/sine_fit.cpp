@@ -21,8 +21,8 @@ constexpr double kMaxMoveSteps = 0.35;
 using Jac =
     Eigen::Matrix<float, Eigen::Dynamic, kParams, Eigen::ColMajor, FastFitScratch::kMaxPixels, kParams>;
 
-// The weighted cost at p and, when JtJ is non-null, the normal equations (Gauss-Newton) of all 12
-// parameters (the six linear terms are rows 6-11). In float over the window's arrays, as
+// The weighted cost at p and, when JtJ is non-null, the normal equations (Gauss-Newton) of all 13
+// parameters (the seven linear terms are rows 6-12). In float over the window's arrays, as
 // fit_saddle_fast is (Eigen vectorises the sines and cosines): the corner's precision needs ~1e-3
 // px of a few-px window, far inside float's 1e-7.
 double evaluate(FastFitScratch& w, int n, const Vec& p, Jac& J, Mat* JtJ, Vec* Jtr) {
@@ -65,7 +65,7 @@ double evaluate(FastFitScratch& w, int n, const Vec& p, Jac& J, Mat* JtJ, Vec* J
   J.col(10) = (sw * dx * S).matrix();
   J.col(11) = (sw * dy * S).matrix();
   J.col(12) = (sw * C).matrix();
-  *JtJ = J.transpose().lazyProduct(J).cast<double>();  // coefficient-wise: no GEMM packing for 12 x 12
+  *JtJ = J.transpose().lazyProduct(J).cast<double>();  // coefficient-wise: no GEMM packing for 13 x 13
   *Jtr = (J.transpose() * (sw * r).matrix()).cast<double>();
   return cost;
 }
@@ -119,7 +119,7 @@ bool fit_sine_corner(const LumaView& img, const CameraModel& cam, const Undistor
   Jac rows;
   Vec p = Vec::Zero();
   p << win.off.x(), win.off.y(), M0(0, 0), M0(0, 1), M0(1, 0), M0(1, 1), 0, 0, 0, 0, 0, 0, 0;
-  // The six linear terms for the start's geometry: one linear least-squares solve.
+  // The seven linear terms for the start's geometry: one linear least-squares solve.
   {
     Mat JtJ;
     Vec Jtr;
