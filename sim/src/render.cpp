@@ -180,7 +180,6 @@ Renderer::Renderer(const recon::StereoRig& rig, const SceneSettings& scene, cons
     const double fx = o.x() + 0.5, fy = o.y() + 0.5;
     edge_weights_.push_back({(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy});
   }
-  init_defects();
 }
 
 void Renderer::irradiance_into(Eye eye, const Pose& board, bool present, Scratch& scratch, float* out) const {
@@ -293,7 +292,7 @@ void Renderer::irradiance_into(Eye eye, const Pose& board, bool present, Scratch
       }
     }
     double v = board_part[p] * light + background_part[p] * scene_.background;
-    if (sensor_.vignetting) v *= rt.cos4[p];
+    if (sensor_.settings().vignetting) v *= rt.cos4[p];
     out[p] = static_cast<float>(v);
   }
 }
@@ -319,18 +318,18 @@ void Renderer::render_into(const Pose& board, Rng& rng, std::uint16_t* left, std
                            Scratch& scratch) const {
   scratch.light.create(kSensorSize, kSensorSize, CV_32FC1);
   irradiance_into(Eye::left, board, scene_.board_present, scratch, scratch.light.ptr<float>());
-  sensor_into(Eye::left, scratch, rng, left);
+  sensor_.expose(static_cast<int>(Eye::left), scratch.light, rng, scratch.sensor, left);
   irradiance_into(Eye::right, board, scene_.board_present, scratch, scratch.light.ptr<float>());
-  sensor_into(Eye::right, scratch, rng, right);
+  sensor_.expose(static_cast<int>(Eye::right), scratch.light, rng, scratch.sensor, right);
 }
 
 void Renderer::render_background_into(Rng& rng, std::uint16_t* left, std::uint16_t* right,
                                       Scratch& scratch) const {
   scratch.light.create(kSensorSize, kSensorSize, CV_32FC1);
   irradiance_into(Eye::left, Pose{}, false, scratch, scratch.light.ptr<float>());
-  sensor_into(Eye::left, scratch, rng, left);
+  sensor_.expose(static_cast<int>(Eye::left), scratch.light, rng, scratch.sensor, left);
   irradiance_into(Eye::right, Pose{}, false, scratch, scratch.light.ptr<float>());
-  sensor_into(Eye::right, scratch, rng, right);
+  sensor_.expose(static_cast<int>(Eye::right), scratch.light, rng, scratch.sensor, right);
 }
 
 RenderedPair render_pair(const SceneSettings& scene, const SensorSettings& sensor,

@@ -1,6 +1,7 @@
 // Rendering of the textured scenes of textured.hpp: exact rays per sub-sample (CameraModel::undistort),
 // analytic intersection, solid texture, a point light at the camera with cos(incidence) / d^2, the
-// lens's cos^4, then the sensor of sensor.hpp (blur, Bayer gains, shot and read noise, 10 bits).
+// lens's cos^4, then the sensor of sensor_model.hpp (the board renderer's: blur, Bayer gains,
+// fixed-pattern noise, the reset line, shot and read noise, defects, 10 bits).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -167,50 +168,15 @@ void TexturedRenderer::irradiance(int eye, const TexturedSceneSettings& scene, c
             fast ? fast_reflectance(fw, scene.texture, local) : reflectance(waves, scene.texture, local);
         sum += rho * cos_i * ref2 / d2;
       }
-      dst[col] = static_cast<float>(sum / nn * (sensor_.vignetting ? rt.cos4[p] : 1.0f));
+      dst[col] = static_cast<float>(sum / nn * (sensor_.settings().vignetting ? rt.cos4[p] : 1.0f));
     }
   }
 }
 
-void TexturedRenderer::apply_sensor(int eye, const cv::Mat& light, Rng& rng, cv::Mat& out) const {
-  cv::Mat blurred = light;
-  if (sensor_.blur) {
-    const double sigma = sensor_.blur_sigma_px();
-    const int k = 2 * static_cast<int>(std::ceil(3.0 * sigma)) + 1;
-    cv::GaussianBlur(light, blurred, cv::Size(k, k), sigma, sigma, cv::BORDER_REPLICATE);
-  }
-  cv::Mat noise;
-  if (sensor_.noise) {
-    cv::RNG cv_rng(rng());
-    noise.create(kSensorSize, kSensorSize, CV_32FC1);
-    cv_rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  }
+void TexturedRenderer::expose(int eye, const cv::Mat& light, Rng& rng, cv::Mat& out) const {
   out.create(kSensorSize, kSensorSize, CV_16UC1);
-  const auto& g = sensor_.channel_gain;
-  for (int r = 0; r < kSensorSize; ++r) {
-    const float* in = blurred.ptr<float>(r);
-    std::uint16_t* o = out.ptr<std::uint16_t>(r);
-    for (int c = 0; c < kSensorSize; ++c) {
-      double gain = 1.0;
-      if (sensor_.bayer) gain = (r & 1) == 0 ? ((c & 1) == 0 ? g[1] : g[0]) : ((c & 1) == 0 ? g[2] : g[1]);
-      const double signal = std::max(0.0, static_cast<double>(in[c]) * sensor_.white_dn * gain);
-      double dn = sensor_.black_level_dn + signal;
-      if (sensor_.noise)
-        dn += std::sqrt(signal / sensor_.gain_e_per_dn + sensor_.read_noise_dn * sensor_.read_noise_dn) *
-              noise.at<float>(r, c);
-      o[c] =
-          static_cast<std::uint16_t>(std::clamp(std::lround(dn), 0L, static_cast<long>(driver::kPixelMax)));
-    }
-  }
-  std::uint16_t* px = out.ptr<std::uint16_t>();
-  if (sensor_.reference_pixels) {
-    for (int c = 0; c < 4; ++c) px[c] = sensor_.reference_row0[c];
-    px[(kSensorSize - 1) * kSensorSize + kSensorSize - 4] = sensor_.reference_row249[0];
-    px[(kSensorSize - 1) * kSensorSize + kSensorSize - 3] = sensor_.reference_row249[1];
-  }
-  for (int r = 0; r < kSensorSize; ++r) px[r * kSensorSize + kSensorSize - 1] = sensor_.padding_value;
-  px[(kSensorSize - 1) * kSensorSize + kSensorSize - 2] = sensor_.padding_value;
-  (void)eye;
+  SensorModel::Scratch scratch;
+  sensor_.expose(eye, light, rng, scratch, out.ptr<std::uint16_t>());
 }
 
 bool TexturedRenderer::right_sees(const Surface& s, const Eigen::Vector3d& X) const {
@@ -256,18 +222,18 @@ void TexturedRenderer::render_frames(const TexturedSceneSettings& scene, Rng& rn
                                      cv::Mat& right) const {
   cv::Mat light;
   irradiance(0, scene, light, true);
-  apply_sensor(0, light, rng, left);
+  expose(0, light, rng, left);
   irradiance(1, scene, light, true);
-  apply_sensor(1, light, rng, right);
+  expose(1, light, rng, right);
 }
 
 TexturedPair TexturedRenderer::render(const TexturedSceneSettings& scene, Rng& rng) const {
   TexturedPair out;
   cv::Mat light;
   irradiance(0, scene, light);
-  apply_sensor(0, light, rng, out.left);
+  expose(0, light, rng, out.left);
   irradiance(1, scene, light);
-  apply_sensor(1, light, rng, out.right);
+  expose(1, light, rng, out.right);
   out.depth = truth_depth(scene.surface);
   return out;
 }

@@ -22,11 +22,9 @@
 #include "naneye/recon/corners/detector.hpp"
 #include "naneye/sim/scene.hpp"
 #include "naneye/sim/sensor.hpp"
+#include "naneye/sim/sensor_model.hpp"
 
 namespace naneye::sim {
-
-// One generator for everything random (noise, poses, timing); the same seed gives the same bytes.
-using Rng = std::mt19937_64;
 
 enum class Eye : int { left = 0, right = 1 };
 
@@ -63,11 +61,12 @@ class Renderer {
 
   const recon::StereoRig& rig() const { return rig_; }
   const SceneSettings& scene() const { return scene_; }
-  const SensorSettings& sensor() const { return sensor_; }
+  const SensorSettings& sensor() const { return sensor_.settings(); }
 
   // Working images reused from frame to frame by render_into (one per rendering thread).
   struct Scratch {
-    cv::Mat light, blurred, noise;
+    cv::Mat light;
+    SensorModel::Scratch sensor;
     std::vector<int> cells;
     std::vector<float> board_part, background_part;
   };
@@ -101,17 +100,12 @@ class Renderer {
   static constexpr double kMaxInterpolationErrorPx = 5e-3;
   static RayTable build_rays(const recon::CameraModel& cam);
   void irradiance_into(Eye eye, const Pose& board, bool present, Scratch& scratch, float* out) const;
-  void sensor_into(Eye eye, Scratch& scratch, Rng& rng, std::uint16_t* out) const;
-  void init_defects();
 
   recon::StereoRig rig_;
   SceneSettings scene_;
-  SensorSettings sensor_;
+  SensorModel sensor_;
   RayTable rays_[2];
   std::vector<Bilinear> edge_weights_;  // edge sub-samples as weights of the pixel's corner rays
-  std::vector<int> defects_[2];         // pixel indices; value in defect_values_
-  std::vector<std::uint16_t> defect_values_[2];
-  std::vector<float> fpn_offset_[2], fpn_gain_[2];  // per pixel; empty without fixed-pattern noise
 };
 
 // One call: builds a Renderer (precomputing rays), renders one pair.

@@ -60,6 +60,11 @@ struct SensorSettings {
 
   // An ideal sensor: no noise, blur, vignetting or defects; reference pixels and padding kept.
   static SensorSettings ideal();
+  // The real NanEye 2D as measured on public frames (the middles of the ranges in
+  // /work/shared/notes/measurements.md, "The real sensor"): shot-noise slope 0.14 DN per electron,
+  // read noise 2.5 DN, blur sigma 1.0 px, column FPN 0.55 DN, DSNU 3.8 DN, PRNU 2 %, a 3-row reset
+  // line 16 DN deep at row 200. The defaults above are ~3x sharper and carry no fixed pattern.
+  static SensorSettings measured(bool bayer);
 };
 
 }  // namespace naneye::sim

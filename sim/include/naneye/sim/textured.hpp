@@ -16,6 +16,7 @@
 #include "naneye/recon/camera/rig.hpp"
 #include "naneye/sim/render.hpp"
 #include "naneye/sim/sensor.hpp"
+#include "naneye/sim/sensor_model.hpp"
 
 namespace naneye::sim {
 
@@ -109,11 +110,11 @@ class TexturedRenderer {
   Rays build(const recon::CameraModel& cam) const;
   // fast: the texture in single precision with a polynomial cosine (render_frames).
   void irradiance(int eye, const TexturedSceneSettings& scene, cv::Mat& out, bool fast = false) const;
-  void apply_sensor(int eye, const cv::Mat& light, Rng& rng, cv::Mat& out) const;
+  void expose(int eye, const cv::Mat& light, Rng& rng, cv::Mat& out) const;
   bool right_sees(const Surface& s, const Eigen::Vector3d& X) const;
 
   recon::StereoRig rig_;
-  SensorSettings sensor_;
+  SensorModel sensor_;
   int n_;
   Rays rays_[2];
 };
