@@ -62,20 +62,10 @@ inline sim::Pose condition_pose(const ImagingCondition& c, const recon::StereoRi
   throw std::runtime_error("condition_pose: no pose of " + c.name + " keeps every inner corner in view");
 }
 
-// The real sensor's figures (ranges' middles), mono or GRBG.
+// The real sensor's figures (sim::SensorSettings::measured), mono or GRBG with equal gains.
 inline sim::SensorSettings real_sensor(bool bayer) {
-  sim::SensorSettings s;
-  s.bayer = bayer;
+  sim::SensorSettings s = sim::SensorSettings::measured(bayer);
   s.channel_gain = {1.0, 1.0, 1.0};
-  s.gain_e_per_dn = 1.0 / 0.14;
-  s.read_noise_dn = 2.5;
-  s.defocus_sigma_px = 0.98;  // with the f/2.7 diffraction (0.21 px): sigma 1.0 px
-  s.column_fpn_dn = 0.55;
-  s.dsnu_dn = 3.8;
-  s.prnu = 0.02;
-  s.reset_rows = 3;
-  s.reset_row = 200;
-  s.reset_depth_dn = 16.0;
   return s;
 }
 
