@@ -7,13 +7,16 @@
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--bayer] [--refusals] [--residual-p P] [--max-sigma PX]
-//                           [--wide-radius R] [--defocus SIGMA]
+//                           [--wide-radius R] [--dense-radius R] [--defocus SIGMA] [--real-sensor]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates. --residual-p P,
 // --max-sigma PX: that test's setting (dense_match.hpp) for a what-if run. --wide-radius R: the
-// sparse path's wider LK window (sparse.hpp; 0: the narrow window only), also a what-if.
+// sparse path's wider LK window (sparse.hpp; 0: the narrow window only), also a what-if; --dense-radius
+// R: the dense sub-pixel window's (dense_match.hpp).
 // --defocus SIGMA: the renders' defocus blur, px (sim/sensor.hpp; default 0.35, with diffraction
 // 0.41 px in all: ~3x sharper than a real NanEye's edges, 1.0-1.6 px, ../shared/notes/measurements.md).
+// --real-sensor: the renders through the real NanEye's measured figures (sim::SensorSettings::measured:
+// blur 1.0 px, its shot and read noise, fixed-pattern noise, the reset line); --defocus still applies.
 #include <time.h>
 
 #include <Eigen/Core>  // before opencv2/core/eigen.hpp
@@ -233,6 +236,8 @@ int main(int argc, char** argv) {
   recon::scene::DenseSettings ds;
   recon::scene::SparseSettings ss;
   sim::SensorSettings sensor;
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--real-sensor")) sensor = sim::SensorSettings::measured(false);
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) seeds = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--bayer")) bayer = true;
@@ -241,6 +246,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc) ds.matcher.radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--defocus") && i + 1 < argc) sensor.defocus_sigma_px = std::atof(argv[++i]);
   }
   cv::setNumThreads(1);  // one core for both paths
@@ -255,8 +261,9 @@ int main(int argc, char** argv) {
   OpenCvDense cv_dense(rig);
   std::vector<std::pair<DenseTally, DenseTally>> dense_rows;
   std::vector<recon::scene::MatchCounts> refused;
-  std::printf("bench_scene: %d renders per scene, %s, blur sigma %.2f px, paper-d3 rig, one thread\n", seeds,
-              bayer ? "GRBG Bayer" : "mono", sensor.blur_sigma_px());
+  std::printf("bench_scene: %d renders per scene, %s, blur sigma %.2f px, %s, paper-d3 rig, one thread\n",
+              seeds, bayer ? "GRBG Bayer" : "mono", sensor.blur_sigma_px(),
+              sensor.dsnu_dn > 0 ? "the real sensor's noise and fixed patterns" : "the simulator's sensor");
   std::printf("%-10s | %-44s | %-44s\n", "", "ours (sparse)", "OpenCV path");
   std::printf("%-10s | %7s %7s %9s %9s %7s | %7s %7s %9s %9s %7s\n", "scene", "p50 ms", "pts", "good",
               "outl %", "err %", "p50 ms", "pts", "good", "outl %", "err %");
