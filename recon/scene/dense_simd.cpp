@@ -7,6 +7,8 @@
 #include <limits>
 #include <type_traits>
 
+#include <immintrin.h>
+
 #include "../corners/simd.hpp"
 
 #pragma GCC diagnostic push
@@ -153,36 +155,79 @@ NANEYE_SIMD_INLINE void lag_products_v(const float* e, int w, int h, double* acc
     for (int dx = 0; dx < kSide; ++dx) acc[dy * kSide + dx] = a[dy][dx / H][dx % H];
 }
 
-// Lanes of L pixels: the taps are picked per pixel (each its own position), the Keys weights and the
-// ten products computed on whole vectors, with the scalar code's expressions term by term.
-template <class V>
-NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, int x, int count, float out[10][kLanes<V>]) {
-  constexpr int L = kLanes<V>;
-  alignas(32) float T[L], R0[L], R1[L], R2[L], R3[L], Lv[L], M[L];
+// A block's taps and left pixels, less mu, its offsets t from tap 0 and its mask (all zero where
+// the pixel has no four valid taps or lies beyond `count`): per lane, in scalar code.
+struct Taps {
+  alignas(32) float T[8], R[4][8], Lv[8], M[8];
+};
+template <int L>
+NANEYE_SIMD_INLINE void pick_lanes(const GatherRow& g, int x, int count, Taps& p) {
   for (int j = 0; j < L; ++j) {
-    T[j] = R0[j] = R1[j] = R2[j] = R3[j] = Lv[j] = M[j] = 0.f;
+    p.T[j] = p.R[0][j] = p.R[1][j] = p.R[2][j] = p.R[3][j] = p.Lv[j] = p.M[j] = 0.f;
     if (j >= count) continue;
     const float d = g.d[x + j];
     if (!std::isfinite(d)) continue;
     const float xs = static_cast<float>(x + j) - d;
     const int i0 = static_cast<int>(std::floor(xs));
     if (i0 < 1 || i0 + 2 >= g.w || !g.taps_ok[i0]) continue;
-    T[j] = xs - static_cast<float>(i0);
-    R0[j] = g.right[i0 - 1] - g.mu;
-    R1[j] = g.right[i0] - g.mu;
-    R2[j] = g.right[i0 + 1] - g.mu;
-    R3[j] = g.right[i0 + 2] - g.mu;
-    Lv[j] = g.left[x + j] - g.mu;
-    M[j] = 1.f;
+    p.T[j] = xs - static_cast<float>(i0);
+    for (int k = 0; k < 4; ++k) p.R[k][j] = g.right[i0 - 1 + k] - g.mu;
+    p.Lv[j] = g.left[x + j] - g.mu;
+    p.M[j] = 1.f;
   }
+}
+
+// The same for 8 whole lanes in AVX2, the same float operations per lane: the position, floor and
+// range tests on vectors, each lane's four taps one 16-byte load (they are contiguous), transposed
+// into the four tap vectors. Lanes without taps load from column 1 (always inside the row, w >= 4)
+// and are masked to zero. No hardware gathers: on this AMD EPYC they gave half the instructions but
+// no time (docs/scene.md, 2026-12-04 night); loads and shuffles are cheap everywhere.
+__attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRow& g, int x, Taps& p) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 d = _mm256_loadu_ps(g.d + x);
+  const __m256 xs = _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(x), lane)), d);
+  // cvttps gives INT_MIN beyond int's range, as the scalar conversion does on x86: refused by i0 >= 1.
+  const __m256i i0 = _mm256_cvttps_epi32(_mm256_floor_ps(xs));
+  const __m256 finite = _mm256_cmp_ps(_mm256_sub_ps(d, d), _mm256_setzero_ps(), _CMP_EQ_OQ);
+  const __m256i in_row = _mm256_and_si256(_mm256_cmpgt_epi32(i0, _mm256_setzero_si256()),
+                                          _mm256_cmpgt_epi32(_mm256_set1_epi32(g.w - 2), i0));
+  const __m256i ok = _mm256_and_si256(_mm256_castps_si256(finite), in_row);
+  alignas(32) int idx[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(idx), _mm256_blendv_epi8(_mm256_set1_epi32(1), i0, ok));
+  int bits = 0;
+  for (int j = 0; j < 8; ++j) bits |= (g.taps_ok[idx[j]] != 0 ? 1 : 0) << j;
+  const __m256i bit = _mm256_sllv_epi32(_mm256_set1_epi32(1), lane);
+  const __m256 mask = _mm256_castsi256_ps(
+      _mm256_and_si256(ok, _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), bit), bit)));
+  const float* r = g.right - 1;
+  __m256 a[4];
+  for (int k = 0; k < 4; ++k)
+    a[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(r + idx[k])),
+                                _mm_loadu_ps(r + idx[k + 4]), 1);
+  const __m256 t0 = _mm256_unpacklo_ps(a[0], a[1]), t1 = _mm256_unpackhi_ps(a[0], a[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(a[2], a[3]), t3 = _mm256_unpackhi_ps(a[2], a[3]);
+  const __m256 tap[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xee),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xee)};
+  const __m256 mu = _mm256_set1_ps(g.mu);
+  _mm256_store_ps(p.T, _mm256_and_ps(mask, _mm256_sub_ps(xs, _mm256_cvtepi32_ps(i0))));
+  for (int k = 0; k < 4; ++k) _mm256_store_ps(p.R[k], _mm256_and_ps(mask, _mm256_sub_ps(tap[k], mu)));
+  _mm256_store_ps(p.Lv, _mm256_and_ps(mask, _mm256_sub_ps(_mm256_loadu_ps(g.left + x), mu)));
+  _mm256_store_ps(p.M, _mm256_and_ps(mask, _mm256_set1_ps(1.f)));
+}
+
+// The Keys weights and the ten products of a block of L picked pixels on whole vectors, with the
+// scalar code's expressions term by term; stored to the row's channels at x (count lanes).
+template <class V>
+NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, const Taps& p, int x, int count) {
+  constexpr int L = kLanes<V>;
   // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
   // from tap 0, for taps -1, 0, 1, 2.
-  const V t = load<V>(T), t2 = t * t, t3 = t2 * t;
+  const V t = load<V>(p.T), t2 = t * t, t3 = t2 * t;
   const V w0 = -0.5f * t3 + t2 - 0.5f * t, w1 = 1.5f * t3 - 2.5f * t2 + 1.f;
   const V w2 = -1.5f * t3 + 2.f * t2 + 0.5f * t, w3 = 0.5f * t3 - 0.5f * t2;
   const V dw0 = -1.5f * t2 + 2.f * t - 0.5f, dw1 = 4.5f * t2 - 5.f * t;
   const V dw2 = -4.5f * t2 + 4.f * t + 0.5f, dw3 = 1.5f * t2 - t;
-  const V r0 = load<V>(R0), r1 = load<V>(R1), r2 = load<V>(R2), r3 = load<V>(R3);
+  const V r0 = load<V>(p.R[0]), r1 = load<V>(p.R[1]), r2 = load<V>(p.R[2]), r3 = load<V>(p.R[3]);
   V W = V{}, G = V{};
   W += w0 * r0;
   W += w1 * r1;
@@ -192,32 +237,17 @@ NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, int x, int count, float
   G += dw1 * r1;
   G += dw2 * r2;
   G += dw3 * r3;
-  const V m = load<V>(M), l = load<V>(Lv);
-  store(out[0], m);
-  store(out[1], m * W);
-  store(out[2], m * l);
-  store(out[3], m * G);
-  store(out[4], m * W * W);
-  store(out[5], m * G * G);
-  store(out[6], m * W * G);
-  store(out[7], m * W * l);
-  store(out[8], m * G * l);
-  store(out[9], m * l * l);
-}
-
-template <class V>
-NANEYE_SIMD_INLINE void gather_row_v(const GatherRow& g) {
-  constexpr int L = kLanes<V>;
-  alignas(32) float out[10][L];
-  for (int x = g.lo; x < g.hi; x += L) {
-    const int count = std::min(L, g.hi - x);
-    gather_block<V>(g, x, count, out);
-    for (int c = 0; c < 10; ++c)
-      if (count == L)
-        store(g.ch[c] + x, load<V>(out[c]));
-      else
-        for (int j = 0; j < count; ++j) g.ch[c][x + j] = out[c][j];
-  }
+  const V m = load<V>(p.M), l = load<V>(p.Lv);
+  const V out[10] = {m,         m * W,     m * l,     m * G,     m * W * W,
+                     m * G * G, m * W * G, m * W * l, m * G * l, m * l * l};
+  for (int c = 0; c < 10; ++c)
+    if (count == L) {
+      store(g.ch[c] + x, out[c]);
+    } else {
+      alignas(32) float o[L];
+      store(o, out[c]);
+      for (int j = 0; j < count; ++j) g.ch[c][x + j] = o[j];
+    }
 }
 
 // The step in the scalar expressions' order, on whole vectors; every branch a select (the lanes
@@ -299,10 +329,24 @@ __attribute__((target("avx2"))) void filter_lags_avx2(const float* z, float* out
   filter_lags_v<simd::V8>(z, out, rho, lag, sp);
 }
 void gather_row_sse(const GatherRow& g) {
-  gather_row_v<simd::V4>(g);
+  Taps p;
+  for (int x = g.lo; x < g.hi; x += 4) {
+    const int count = std::min(4, g.hi - x);
+    pick_lanes<4>(g, x, count, p);
+    gather_block<simd::V4>(g, p, x, count);
+  }
 }
+// pick_avx2 is called here, not from a template: GCC inlines an AVX2 function only into another.
 __attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& g) {
-  gather_row_v<simd::V8>(g);
+  Taps p;
+  for (int x = g.lo; x < g.hi; x += 8) {
+    const int count = std::min(8, g.hi - x);
+    if (count == 8 && g.w >= 4)
+      pick_avx2(g, x, p);
+    else
+      pick_lanes<8>(g, x, count, p);
+    gather_block<simd::V8>(g, p, x, count);
+  }
 }
 void lag_products_sse(const float* e, int w, int h, double* acc) {
   lag_products_v<simd::V4>(e, w, h, acc);
