@@ -69,4 +69,22 @@ struct StepRow {
 };
 void step_row(bool avx2, const StepRow& r);
 
+// One row of the last Gauss-Newton iteration's fit (RectifiedMatcher::refine), in double, over
+// columns [lo, hi) (dense_fit.cpp). From the window sums s[0..9] (N, W, L, G, WW, GG, WG, WL, GL, LL)
+// at this row: n = N, step = solved = 0; no disparity, no data, N < 4 or det <= 0: d = NaN and nothing
+// else written; else the fit's a, b, c, s2, z and centred sums, and where a > 0 the step c / a clamped
+// to half a pixel, solved = 1. The AVX2 build computes 4 pixels at once in the scalar loop's order.
+struct FitRow {
+  const float* s[10];
+  const float* m;  // the gather's mask channel
+  float* d;        // reference disparities (in; NaN where refused)
+  float *n, *step, *solved, *a, *b, *c, *s2, *z, *sww, *swg, *sgg;
+  int lo, hi;
+};
+void fit_row(bool avx2, const FitRow& r);
+
+// One row of the earlier iterations' window mean (RectifiedMatcher::refine) over [lo, hi), where d is
+// finite: next = sum / cnt (d where cnt <= 0), moved = next - d, d = next.
+void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* moved, int lo, int hi);
+
 }  // namespace naneye::recon::scene::dense_simd

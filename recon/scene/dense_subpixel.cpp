@@ -106,40 +106,27 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     } else {
       reference_detail();
       // The last fit in double: its gain, offset, residual and variance are read after the loop.
-      sp.each([&](std::size_t i) {
-        const float N = S[i];
-        n_[i] = N;
-        mstep[i] = 0;
-        msolved[i] = 0;
-        if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
-          d_[i] = kNoMatch;
-          return;
-        }
-        const double inv = 1.0 / N;
-        const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
-        const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
-        const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
-        const double Sgl = S[8 * n + i] - sgr * sl * inv;
-        const double det = Sww * Sgg - Swg * Swg;
-        if (!(det > 0)) {
-          d_[i] = kNoMatch;
-          return;
-        }
-        const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
-        const double Sll = S[9 * n + i] - sl * sl * inv;
-        a_[i] = static_cast<float>(a);
-        c_[i] = static_cast<float>(c);
-        b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
-        s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
-        z_[i] = static_cast<float>(Sww / det);
-        sww_[i] = static_cast<float>(Sww);
-        swg_[i] = static_cast<float>(Swg);
-        sgg_[i] = static_cast<float>(Sgg);
-        if (!(a > 0)) return;  // anti-correlated: validate() refuses it
-        // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
-        mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
-        msolved[i] = 1;
-      });
+      dense_simd::FitRow r{};
+      for (int y = 0; y < h_; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y) * w_;
+        for (int k = 0; k < 10; ++k) r.s[k] = S + static_cast<std::size_t>(k) * n + row;
+        r.m = chan_.data() + row;
+        r.d = d_.data() + row;
+        r.n = n_.data() + row;
+        r.step = mstep + row;
+        r.solved = msolved + row;
+        r.a = a_.data() + row;
+        r.b = b_.data() + row;
+        r.c = c_.data() + row;
+        r.s2 = s2_.data() + row;
+        r.z = z_.data() + row;
+        r.sww = sww_.data() + row;
+        r.swg = swg_.data() + row;
+        r.sgg = sgg_.data() + row;
+        r.lo = span_lo_[static_cast<std::size_t>(y)];
+        r.hi = span_hi_[static_cast<std::size_t>(y)];
+        dense_simd::fit_row(avx2_, r);
+      }
     }
     // The window's shape is the reference field d_ (each pixel warped by its own reference
     // disparity: slanted surfaces keep their shape), its correction the window's common step. The
@@ -168,13 +155,12 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     }
     dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
     dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
-    sp.each([&](std::size_t i) {
-      if (!std::isfinite(d_[i])) return;
-      const float cnt = S[5 * n + i];
-      const float next = cnt > 0 ? S[4 * n + i] / cnt : d_[i];
-      smooth_step_[i] = next - d_[i];
-      d_[i] = next;
-    });
+    for (int y = 0; y < h_; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * w_;
+      dense_simd::mean_row(avx2_, S + 4 * n + row, S + 5 * n + row, d_.data() + row,
+                           smooth_step_.data() + row, span_lo_[static_cast<std::size_t>(y)],
+                           span_hi_[static_cast<std::size_t>(y)]);
+    }
   }
   correlation(valid_left);
 }

@@ -1,0 +1,170 @@
+// The sub-pixel step's last fit and window mean (dense_simd.hpp's fit_row, mean_row): the scalar
+// loops, and AVX2 builds computing 4 (the fit, in double) or 8 (the mean) pixels at once with the
+// same operations in the same order, every branch a select, so both give the same bits
+// (DenseKernels.FitRow*, MeanRow*). Compiled for "avx2" alone: no fused multiply-add.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include "dense_simd.hpp"
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace naneye::recon::scene::dense_simd {
+namespace {
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+
+// The fit of pixel x, the plain loop the vector build must match.
+inline void fit_one(const FitRow& r, int x) {
+  const float N = r.s[0][x];
+  r.n[x] = N;
+  r.step[x] = 0;
+  r.solved[x] = 0;
+  if (!std::isfinite(r.d[x]) || r.m[x] == 0 || N < 4) {
+    r.d[x] = kNan;
+    return;
+  }
+  const double inv = 1.0 / N;
+  const double sw = r.s[1][x], sl = r.s[2][x], sgr = r.s[3][x];
+  const double Sww = r.s[4][x] - sw * sw * inv, Sgg = r.s[5][x] - sgr * sgr * inv;
+  const double Swg = r.s[6][x] - sw * sgr * inv, Swl = r.s[7][x] - sw * sl * inv;
+  const double Sgl = r.s[8][x] - sgr * sl * inv;
+  const double det = Sww * Sgg - Swg * Swg;
+  if (!(det > 0)) {
+    r.d[x] = kNan;
+    return;
+  }
+  const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
+  const double Sll = r.s[9][x] - sl * sl * inv;
+  r.a[x] = static_cast<float>(a);
+  r.c[x] = static_cast<float>(c);
+  r.b[x] = static_cast<float>((sl - a * sw + c * sgr) * inv);
+  r.s2[x] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
+  r.z[x] = static_cast<float>(Sww / det);
+  r.sww[x] = static_cast<float>(Sww);
+  r.swg[x] = static_cast<float>(Swg);
+  r.sgg[x] = static_cast<float>(Sgg);
+  if (!(a > 0)) return;  // anti-correlated: validate() refuses it
+  // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
+  r.step[x] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
+  r.solved[x] = 1;
+}
+
+using VF = float __attribute__((vector_size(16)));
+using VI = std::int32_t __attribute__((vector_size(16)));
+using VD = double __attribute__((vector_size(32)));
+using VL = std::int64_t __attribute__((vector_size(32)));
+using V8 = float __attribute__((vector_size(32)));
+using VI8 = std::int32_t __attribute__((vector_size(32)));
+
+template <class T>
+inline __attribute__((always_inline)) T ld(const float* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class T>
+inline __attribute__((always_inline)) void st(float* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+inline __attribute__((always_inline)) VD wide(VF v) {
+  return __builtin_convertvector(v, VD);
+}
+inline __attribute__((always_inline)) VF narrow(VD v) {
+  return __builtin_convertvector(v, VF);
+}
+// A double comparison's lanes (0 / -1 as 64 bits) as float lanes' (0 / -1 as 32 bits).
+inline __attribute__((always_inline)) VI lanes(VL m) {
+  return __builtin_convertvector(m, VI);
+}
+
+// Pixels x .. x + 3: fit_one's expressions on doubles; where fit_one writes nothing, the old values
+// are stored back.
+inline __attribute__((always_inline)) void fit4(const FitRow& r, int x) {
+  const VF zero = VF{}, N = ld<VF>(r.s[0] + x), d = ld<VF>(r.d + x);
+  st(r.n + x, N);
+  // d - d is NaN unless d is finite; NaN compares unequal.
+  const VI refused = (d - d != zero) | (ld<VF>(r.m + x) == zero) | (N < 4.f);
+  const VD Nd = wide(N), inv = 1.0 / Nd;
+  const VD sw = wide(ld<VF>(r.s[1] + x)), sl = wide(ld<VF>(r.s[2] + x)), sgr = wide(ld<VF>(r.s[3] + x));
+  const VD Sww = wide(ld<VF>(r.s[4] + x)) - sw * sw * inv, Sgg = wide(ld<VF>(r.s[5] + x)) - sgr * sgr * inv;
+  const VD Swg = wide(ld<VF>(r.s[6] + x)) - sw * sgr * inv, Swl = wide(ld<VF>(r.s[7] + x)) - sw * sl * inv;
+  const VD Sgl = wide(ld<VF>(r.s[8] + x)) - sgr * sl * inv;
+  const VD det = Sww * Sgg - Swg * Swg;
+  const VI bad = refused | ~lanes(det > 0.0);
+  st(r.d + x, bad ? VF{} + kNan : d);
+  const VD a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
+  const VD Sll = wide(ld<VF>(r.s[9] + x)) - sl * sl * inv;
+  const VD res = Sll - a * Swl + c * Sgl, dof = Nd - 3.0;
+  // std::max(lo, v) is v when lo < v, else lo; std::clamp(v, lo, hi) is lo when v < lo, else hi
+  // when hi < v, else v: the same selects, NaN included.
+  const VD s2 = (0.0 < res ? res : VD{} + 0.0) / (1.0 < dof ? dof : VD{} + 1.0);
+  auto keep = [&](float* p, VD v) { st(p + x, bad ? ld<VF>(p + x) : narrow(v)); };
+  keep(r.a, a);
+  keep(r.c, c);
+  keep(r.b, (sl - a * sw + c * sgr) * inv);
+  keep(r.s2, s2);
+  keep(r.z, Sww / det);
+  keep(r.sww, Sww);
+  keep(r.swg, Swg);
+  keep(r.sgg, Sgg);
+  const VI ok = ~bad & lanes(a > 0.0);
+  VD q = c / a;
+  q = q < -0.5 ? VD{} - 0.5 : 0.5 < q ? VD{} + 0.5 : q;
+  st(r.step + x, ok ? narrow(q) : zero);
+  st(r.solved + x, ok ? zero + 1.f : zero);
+}
+
+void fit_row_sse(const FitRow& r) {
+  for (int x = r.lo; x < r.hi; ++x) fit_one(r, x);
+}
+__attribute__((target("avx2"))) void fit_row_avx2(const FitRow& r) {
+  int x = r.lo;
+  for (; x + 4 <= r.hi; x += 4) fit4(r, x);
+  for (; x < r.hi; ++x) fit_one(r, x);
+}
+
+template <class V>
+inline __attribute__((always_inline)) void mean_v(const float* sum, const float* cnt, float* d, float* moved,
+                                                  int x) {
+  const V zero = V{}, dv = ld<V>(d + x), c = ld<V>(cnt + x);
+  const V next = c > zero ? ld<V>(sum + x) / c : dv;
+  const auto finite = dv - dv == zero;
+  st(moved + x, finite ? next - dv : ld<V>(moved + x));
+  st(d + x, finite ? next : dv);
+}
+inline void mean_one(const float* sum, const float* cnt, float* d, float* moved, int x) {
+  if (!std::isfinite(d[x])) return;
+  const float next = cnt[x] > 0 ? sum[x] / cnt[x] : d[x];
+  moved[x] = next - d[x];
+  d[x] = next;
+}
+void mean_row_sse(const float* sum, const float* cnt, float* d, float* moved, int lo, int hi) {
+  int x = lo;
+  for (; x + 4 <= hi; x += 4) mean_v<VF>(sum, cnt, d, moved, x);
+  for (; x < hi; ++x) mean_one(sum, cnt, d, moved, x);
+}
+__attribute__((target("avx2"))) void mean_row_avx2(const float* sum, const float* cnt, float* d, float* moved,
+                                                   int lo, int hi) {
+  int x = lo;
+  for (; x + 8 <= hi; x += 8) mean_v<V8>(sum, cnt, d, moved, x);
+  for (; x < hi; ++x) mean_one(sum, cnt, d, moved, x);
+}
+
+}  // namespace
+
+void fit_row(bool avx2, const FitRow& r) {
+  (avx2 ? fit_row_avx2 : fit_row_sse)(r);
+}
+
+void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* moved, int lo, int hi) {
+  (avx2 ? mean_row_avx2 : mean_row_sse)(sum, cnt, d, moved, lo, hi);
+}
+
+}  // namespace naneye::recon::scene::dense_simd
+
+#pragma GCC diagnostic pop
