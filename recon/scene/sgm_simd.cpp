@@ -110,21 +110,21 @@ NANEYE_SGM_INLINE void wta_v(const std::int16_t* sum, int D, int dmin, int w, in
     const std::int16_t* s = sum + static_cast<std::size_t>(x) * D;
     std::int16_t* rc = rcost_rev + (w - 1 - x + dmin);
     std::int16_t* rd = rdisp_rev + (w - 1 - x + dmin);
-    V m = V{} + sgm_simd::kPad;
-    for (int d = 0; d < D; d += L) {
+    // Per lane its minimum and the first d holding it (strictly below: an equal later d does not
+    // replace it); the first d at the row's minimum is then the smallest of those indices among the
+    // lanes whose minimum it is. One pass over the block (a second one, for the index, cost more).
+    V m = V{} + sgm_simd::kPad, at = m, di = lane, dd = lane + static_cast<std::int16_t>(dmin);
+    for (int d = 0; d < D; d += L, di += static_cast<std::int16_t>(L), dd += static_cast<std::int16_t>(L)) {
       const V v = load<V>(s + d), c = load<V>(rc + d);
-      m = vmin(m, v);
+      const auto lower = v < m;
+      m = lower ? v : m;
+      at = lower ? di : at;
       const auto better = v < c;  // branch-free: which of the right pixels this left pixel improves
       store(rc + d, better ? v : c);
-      store(rd + d, better ? lane + static_cast<std::int16_t>(dmin + d) : load<V>(rd + d));
+      store(rd + d, better ? dd : load<V>(rd + d));
     }
-    // The first d at the minimum: the smallest index among the lanes that hold it (a second pass
-    // over the block, from L1, rather than a scalar scan of ~D / 2 steps).
     const V mv = V{} + static_cast<std::int16_t>(hmin<B>(m));
-    V first = V{} + sgm_simd::kPad;
-    for (int d = 0; d < D; d += L)
-      first = vmin(first, load<V>(s + d) == mv ? lane + static_cast<std::int16_t>(d) : first);
-    best[x] = static_cast<std::int16_t>(hmin<B>(first));
+    best[x] = static_cast<std::int16_t>(hmin<B>(m == mv ? at : V{} + sgm_simd::kPad));
   }
 }
 
