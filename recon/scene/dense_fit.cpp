@@ -1,12 +1,14 @@
-// The sub-pixel step's last fit and window mean (dense_simd.hpp's fit_row, mean_row): the scalar
-// loops, and AVX2 builds computing 4 (the fit, in double) or 8 (the mean) pixels at once with the
+// The sub-pixel step's per-pixel fits (dense_simd.hpp's fit_row, detail_row, update_row, mean_row):
+// the scalar loops, and AVX2 builds computing 4 (in double) or 8 (in float) pixels at once with the
 // same operations in the same order, every branch a select, so both give the same bits
-// (DenseKernels.FitRow*, MeanRow*). Compiled for "avx2" alone: no fused multiply-add.
+// (tests/scene/test_dense_fit.cpp). Compiled for "avx2" alone: no fused multiply-add.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+
+#include <immintrin.h>
 
 #include "dense_simd.hpp"
 
@@ -128,6 +130,74 @@ __attribute__((target("avx2"))) void fit_row_avx2(const FitRow& r) {
   for (; x < r.hi; ++x) fit_one(r, x);
 }
 
+inline void detail_one(const DetailRow& r, int x) {
+  const double N = r.s[0][x];
+  if (!(N >= 4)) {
+    r.out[x] = 0.f;
+    return;
+  }
+  const double inv = 1.0 / N;
+  const double sw = r.s[1][x], sg = r.s[3][x];
+  const double Sww = r.s[4][x] - sw * sw * inv, Sgg = r.s[5][x] - sg * sg * inv;
+  const double Swg = r.s[6][x] - sw * sg * inv;
+  const double det = Sww * Sgg - Swg * Swg;
+  const double wgq_c = r.s[7][x] - sw * inv * r.sgq[x];
+  const double ggq_c = r.s[8][x] - sg * inv * r.sgq[x];
+  r.out[x] = det > 0 ? static_cast<float>((Sww * ggq_c - Swg * wgq_c) / det) : 0.f;
+}
+inline __attribute__((always_inline)) void detail4(const DetailRow& r, int x) {
+  const VD N = wide(ld<VF>(r.s[0] + x)), inv = 1.0 / N;
+  const VD sw = wide(ld<VF>(r.s[1] + x)), sg = wide(ld<VF>(r.s[3] + x)), sgq = wide(ld<VF>(r.sgq + x));
+  const VD Sww = wide(ld<VF>(r.s[4] + x)) - sw * sw * inv, Sgg = wide(ld<VF>(r.s[5] + x)) - sg * sg * inv;
+  const VD Swg = wide(ld<VF>(r.s[6] + x)) - sw * sg * inv;
+  const VD det = Sww * Sgg - Swg * Swg;
+  const VD wgq_c = wide(ld<VF>(r.s[7] + x)) - sw * inv * sgq;
+  const VD ggq_c = wide(ld<VF>(r.s[8] + x)) - sg * inv * sgq;
+  const VI ok = lanes(N >= 4.0) & lanes(det > 0.0);
+  st(r.out + x, ok ? narrow((Sww * ggq_c - Swg * wgq_c) / det) : VF{});
+}
+void detail_row_sse(const DetailRow& r) {
+  for (int x = r.lo; x < r.hi; ++x) detail_one(r, x);
+}
+__attribute__((target("avx2"))) void detail_row_avx2(const DetailRow& r) {
+  int x = r.lo;
+  for (; x + 4 <= r.hi; x += 4) detail4(r, x);
+  for (; x < r.hi; ++x) detail_one(r, x);
+}
+
+inline void update_one(const UpdateRow& r, int x) {
+  if (!(r.solved[x] > 0)) {
+    r.d[x] = kNan;
+    return;
+  }
+  const float move = r.q_win[x] - r.q[x];
+  const float noise = 3.f * std::sqrt(r.s2[x] * r.z[x]) / r.a[x];
+  const bool smooth = std::abs(r.q[x]) <= noise && std::abs(move) <= noise;
+  r.d[x] += r.step[x] + (smooth ? move : 0.f);
+}
+void update_row_sse(const UpdateRow& r) {
+  for (int x = r.lo; x < r.hi; ++x) update_one(r, x);
+}
+// sqrt and the absolute values by instructions (both exact: the scalar code's bits).
+__attribute__((target("avx2"))) void update_row_avx2(const UpdateRow& r) {
+  const __m256 sign = _mm256_set1_ps(-0.f), zero = _mm256_setzero_ps();
+  int x = r.lo;
+  for (; x + 8 <= r.hi; x += 8) {
+    const __m256 q = _mm256_loadu_ps(r.q + x), move = _mm256_sub_ps(_mm256_loadu_ps(r.q_win + x), q);
+    const __m256 noise = _mm256_div_ps(
+        _mm256_mul_ps(_mm256_set1_ps(3.f),
+                      _mm256_sqrt_ps(_mm256_mul_ps(_mm256_loadu_ps(r.s2 + x), _mm256_loadu_ps(r.z + x)))),
+        _mm256_loadu_ps(r.a + x));
+    const __m256 smooth = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sign, q), noise, _CMP_LE_OQ),
+                                        _mm256_cmp_ps(_mm256_andnot_ps(sign, move), noise, _CMP_LE_OQ));
+    const __m256 d = _mm256_add_ps(_mm256_loadu_ps(r.d + x),
+                                   _mm256_add_ps(_mm256_loadu_ps(r.step + x), _mm256_and_ps(smooth, move)));
+    const __m256 solved = _mm256_cmp_ps(_mm256_loadu_ps(r.solved + x), zero, _CMP_GT_OQ);
+    _mm256_storeu_ps(r.d + x, _mm256_blendv_ps(_mm256_set1_ps(kNan), d, solved));
+  }
+  for (; x < r.hi; ++x) update_one(r, x);
+}
+
 template <class V>
 inline __attribute__((always_inline)) void mean_v(const float* sum, const float* cnt, float* d, float* moved,
                                                   int x) {
@@ -159,6 +229,14 @@ __attribute__((target("avx2"))) void mean_row_avx2(const float* sum, const float
 
 void fit_row(bool avx2, const FitRow& r) {
   (avx2 ? fit_row_avx2 : fit_row_sse)(r);
+}
+
+void detail_row(bool avx2, const DetailRow& r) {
+  (avx2 ? detail_row_avx2 : detail_row_sse)(r);
+}
+
+void update_row(bool avx2, const UpdateRow& r) {
+  (avx2 ? update_row_avx2 : update_row_sse)(r);
 }
 
 void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* moved, int lo, int hi) {

@@ -83,6 +83,27 @@ struct FitRow {
 };
 void fit_row(bool avx2, const FitRow& r);
 
+// One row of window_detail()'s solve (RectifiedMatcher, dense_subpixel.cpp), in double over [lo, hi):
+// from the fit's sums s[0, 1, 3, 4, 5, 6] (N, W, G, WW, GG, WG), the detail's s[7] = sum WGq,
+// s[8] = sum GGq and sgq = sum Gq, out = (Sww ggq_c - Swg wgq_c) / det (0 where N < 4 or det <= 0).
+struct DetailRow {
+  const float* s[9];
+  const float* sgq;
+  float* out;
+  int lo, hi;
+};
+void detail_row(bool avx2, const DetailRow& r);
+
+// One row of the last iteration's update (RectifiedMatcher::refine) over [lo, hi): d = NaN where not
+// solved, else d += step + (move if both the detail q and move = q_win - q lie within 3 sigma =
+// 3 sqrt(s2 z) / a, else 0).
+struct UpdateRow {
+  const float *solved, *step, *q, *q_win, *s2, *z, *a;
+  float* d;
+  int lo, hi;
+};
+void update_row(bool avx2, const UpdateRow& r);
+
 // One row of the earlier iterations' window mean (RectifiedMatcher::refine) over [lo, hi), where d is
 // finite: next = sum / cnt (d where cnt <= 0), moved = next - d, d = next.
 void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* moved, int lo, int hi);

@@ -165,20 +165,25 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     if (last) {
       // The window's estimate at the final reference, its detail replaced by the window's view of it.
       const float* q_win = window_detail();
-      sp.each([&](std::size_t i) {
-        if (!(msolved[i] > 0)) {
-          d_[i] = kNoMatch;
-          return;
-        }
-        // Only where the detail is noise: a detail or a move beyond 3 sigma (white-noise sigma, no
-        // kappa) is the surface's own structure, a depth edge or a fold the smooth part cannot
-        // follow (ungated, Middlebury Aloe's bad-0.5 rose from 4.22 to 4.59 % with a window-sized
-        // smooth part, to 5.12 % with twice that; gated, 4.31 %).
-        const float move = q_win[i] - chan_[7 * n + i];
-        const float noise = 3.f * std::sqrt(s2_[i] * z_[i]) / a_[i];
-        const bool smooth = std::abs(chan_[7 * n + i]) <= noise && std::abs(move) <= noise;
-        d_[i] += mstep[i] + (smooth ? move : 0.f);
-      });
+      // Only where the detail is noise: a detail or a move beyond 3 sigma (white-noise sigma, no
+      // kappa) is the surface's own structure, a depth edge or a fold the smooth part cannot
+      // follow (ungated, Middlebury Aloe's bad-0.5 rose from 4.22 to 4.59 % with a window-sized
+      // smooth part, to 5.12 % with twice that; gated, 4.31 %).
+      dense_simd::UpdateRow u{};
+      for (int y = 0; y < h_; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y) * w_;
+        u.solved = msolved + row;
+        u.step = mstep + row;
+        u.q = chan_.data() + 7 * n + row;
+        u.q_win = q_win + row;
+        u.s2 = s2_.data() + row;
+        u.z = z_.data() + row;
+        u.a = a_.data() + row;
+        u.d = d_.data() + row;
+        u.lo = span_lo_[static_cast<std::size_t>(y)];
+        u.hi = span_hi_[static_cast<std::size_t>(y)];
+        dense_simd::update_row(avx2_, u);
+      }
       break;
     }
     dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
@@ -249,21 +254,16 @@ const float* RectifiedMatcher::window_detail() {
   dense_simd::box_sum(avx2_, ggq, S + 8 * n, scratch_.data(), sp, s_.radius);
   dense_simd::box_sum(avx2_, gq, sgq, scratch_.data(), sp, s_.radius);
   float* out = wgq;  // its sum is taken
-  sp.each([&](std::size_t i) {
-    const double N = S[i];
-    if (!(N >= 4)) {
-      out[i] = 0.f;
-      return;
-    }
-    const double inv = 1.0 / N;
-    const double sw = S[n + i], sg = S[3 * n + i];
-    const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sg * sg * inv;
-    const double Swg = S[6 * n + i] - sw * sg * inv;
-    const double det = Sww * Sgg - Swg * Swg;
-    const double wgq_c = S[7 * n + i] - sw * inv * sgq[i];
-    const double ggq_c = S[8 * n + i] - sg * inv * sgq[i];
-    out[i] = det > 0 ? static_cast<float>((Sww * ggq_c - Swg * wgq_c) / det) : 0.f;
-  });
+  dense_simd::DetailRow r{};
+  for (int y = 0; y < h_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    for (int k = 0; k < 9; ++k) r.s[k] = S + static_cast<std::size_t>(k) * n + row;
+    r.sgq = sgq + row;
+    r.out = out + row;
+    r.lo = span_lo_[static_cast<std::size_t>(y)];
+    r.hi = span_hi_[static_cast<std::size_t>(y)];
+    dense_simd::detail_row(avx2_, r);
+  }
   return out;
 }
 
