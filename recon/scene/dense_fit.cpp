@@ -1,6 +1,7 @@
-// The sub-pixel step's per-pixel fits (dense_simd.hpp's fit_row, detail_row, update_row, mean_row):
-// the scalar loops, and AVX2 builds computing 4 (in double) or 8 (in float) pixels at once with the
-// same operations in the same order, every branch a select, so both give the same bits
+// The sub-pixel step's per-pixel fits and correlation() steps (dense_simd.hpp's fit_row, detail_row,
+// update_row, mean_row, residual_row, centre_row, kappa_row): scalar loops or 4-float vectors for
+// SSE2, and AVX2 builds computing 4 (in double) or 8 (in float) pixels at once, all with the same
+// operations in the same order and every branch a select, so every build gives the plain loops' bits
 // (tests/scene/test_dense_fit.cpp). Compiled for "avx2" alone: no fused multiply-add.
 #include <algorithm>
 #include <cmath>
@@ -225,7 +226,98 @@ __attribute__((target("avx2"))) void mean_row_avx2(const float* sum, const float
   for (; x < hi; ++x) mean_one(sum, cnt, d, moved, x);
 }
 
+// correlation()'s steps per pixel or lane: T is float (the tails) or a vector, the same expressions.
+template <class T>
+inline __attribute__((always_inline)) void residual_at(const ResidualRow& r, float thr, std::size_t i) {
+  const T d = ld<T>(r.d + i), e = ld<T>(r.a + i) * ld<T>(r.w + i) + ld<T>(r.b + i) -
+                                  ld<T>(r.c + i) * ld<T>(r.g + i) - ld<T>(r.l + i);
+  st(r.e + i, (ld<T>(r.m + i) > 0.f) & (d - d == 0.f) & (ld<T>(r.s2 + i) <= thr) ? e : T{});
+}
+template <class T>
+inline __attribute__((always_inline)) void centre_at(const float* m, const float* g, const float* sg,
+                                                     const float* sn, float* z, float* zz, float* zh, int x) {
+  const T one = T{} + 1.f, n = ld<T>(sn + x);
+  const T zv = ld<T>(m + x) > 0.f ? ld<T>(g + x) - ld<T>(sg + x) / (1.f < n ? n : one) : T{};
+  st(z + x, zv);
+  st(zz + x, zv * zv);
+  st(zh + x, T{});
+}
+template <class T>
+inline __attribute__((always_inline)) void kappa_at(const float* szz, const float* szh, float* kappa, int x) {
+  const T s = ld<T>(szz + x), q = ld<T>(szh + x) / s;
+  st(kappa + x, s > 0.f ? (0.f < q ? q : T{}) : T{} + 1.f);
+}
+
+// The largest float <= lim: s2 <= it exactly where the float s2 <= lim in double.
+float floor_to_float(double lim) {
+  float t = static_cast<float>(lim);
+  if (static_cast<double>(t) > lim) t = std::nextafter(t, -std::numeric_limits<float>::infinity());
+  return t;
+}
+
+template <class V>
+inline __attribute__((always_inline)) void residual_v(const ResidualRow& r, double lim, std::size_t lo,
+                                                      std::size_t hi) {
+  const float thr = floor_to_float(lim);
+  std::size_t i = lo;
+  for (; i + sizeof(V) / 4 <= hi; i += sizeof(V) / 4) residual_at<V>(r, thr, i);
+  for (; i < hi; ++i) residual_at<float>(r, thr, i);
+}
+template <class V>
+inline __attribute__((always_inline)) void centre_v(const float* m, const float* g, const float* sg,
+                                                    const float* sn, float* z, float* zz, float* zh, int lo,
+                                                    int hi) {
+  int x = lo;
+  for (; x + static_cast<int>(sizeof(V) / 4) <= hi; x += sizeof(V) / 4)
+    centre_at<V>(m, g, sg, sn, z, zz, zh, x);
+  for (; x < hi; ++x) centre_at<float>(m, g, sg, sn, z, zz, zh, x);
+}
+template <class V>
+inline __attribute__((always_inline)) void kappa_v(const float* szz, const float* szh, float* kappa, int lo,
+                                                   int hi) {
+  int x = lo;
+  for (; x + static_cast<int>(sizeof(V) / 4) <= hi; x += sizeof(V) / 4) kappa_at<V>(szz, szh, kappa, x);
+  for (; x < hi; ++x) kappa_at<float>(szz, szh, kappa, x);
+}
+
+void residual_sse(const ResidualRow& r, double lim, std::size_t lo, std::size_t hi) {
+  residual_v<VF>(r, lim, lo, hi);
+}
+__attribute__((target("avx2"))) void residual_avx2(const ResidualRow& r, double lim, std::size_t lo,
+                                                   std::size_t hi) {
+  residual_v<V8>(r, lim, lo, hi);
+}
+void centre_sse(const float* m, const float* g, const float* sg, const float* sn, float* z, float* zz,
+                float* zh, int lo, int hi) {
+  centre_v<VF>(m, g, sg, sn, z, zz, zh, lo, hi);
+}
+__attribute__((target("avx2"))) void centre_avx2(const float* m, const float* g, const float* sg,
+                                                 const float* sn, float* z, float* zz, float* zh, int lo,
+                                                 int hi) {
+  centre_v<V8>(m, g, sg, sn, z, zz, zh, lo, hi);
+}
+void kappa_sse(const float* szz, const float* szh, float* kappa, int lo, int hi) {
+  kappa_v<VF>(szz, szh, kappa, lo, hi);
+}
+__attribute__((target("avx2"))) void kappa_avx2(const float* szz, const float* szh, float* kappa, int lo,
+                                                int hi) {
+  kappa_v<V8>(szz, szh, kappa, lo, hi);
+}
+
 }  // namespace
+
+void residual_row(bool avx2, const ResidualRow& r, double lim, std::size_t lo, std::size_t hi) {
+  (avx2 ? residual_avx2 : residual_sse)(r, lim, lo, hi);
+}
+
+void centre_row(bool avx2, const float* m, const float* g, const float* sg, const float* sn, float* z,
+                float* zz, float* zh, int lo, int hi) {
+  (avx2 ? centre_avx2 : centre_sse)(m, g, sg, sn, z, zz, zh, lo, hi);
+}
+
+void kappa_row(bool avx2, const float* szz, const float* szh, float* kappa, int lo, int hi) {
+  (avx2 ? kappa_avx2 : kappa_sse)(szz, szh, kappa, lo, hi);
+}
 
 void fit_row(bool avx2, const FitRow& r) {
   (avx2 ? fit_row_avx2 : fit_row_sse)(r);

@@ -104,6 +104,19 @@ struct UpdateRow {
 };
 void update_row(bool avx2, const UpdateRow& r);
 
+// correlation()'s per-pixel steps (dense_fit.cpp), over [lo, hi) of the given planes:
+// residual: e = a W + b - c G - L where m > 0, d is finite and s2 <= lim, else 0;
+// centre: z = G - sum G / max(1, N) where m > 0, else 0; zz = z^2; zh = 0;
+// kappa: k = max(0, szh / szz) where szz > 0, else 1.
+struct ResidualRow {
+  const float *m, *w, *l, *g, *d, *s2, *a, *b, *c;
+  float* e;
+};
+void residual_row(bool avx2, const ResidualRow& r, double lim, std::size_t lo, std::size_t hi);
+void centre_row(bool avx2, const float* m, const float* g, const float* sg, const float* sn, float* z,
+                float* zz, float* zh, int lo, int hi);
+void kappa_row(bool avx2, const float* szz, const float* szh, float* kappa, int lo, int hi);
+
 // One row of the earlier iterations' window mean (RectifiedMatcher::refine) over [lo, hi), where d is
 // finite: next = sum / cnt (d where cnt <= 0), moved = next - d, d = next.
 void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* moved, int lo, int hi);

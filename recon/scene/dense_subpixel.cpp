@@ -280,12 +280,11 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   if (m > 0) {
     med = kth_smallest(line_copy_.data(), m, m / 2, select_hist_);
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
-    // noise: left out of the autocorrelation.
-    const bool use = ch[i] > 0 && std::isfinite(d_[i]) && s2_[i] <= 3 * med;
-    e[i] = use ? a_[i] * ch[n + i] + b_[i] - c_[i] * ch[3 * n + i] - ch[2 * n + i] : 0.f;
-  }
+  // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
+  // noise: left out of the autocorrelation.
+  const dense_simd::ResidualRow rr{ch,         ch + n,    ch + 2 * n, ch + 3 * n, d_.data(),
+                                   s2_.data(), a_.data(), b_.data(),  c_.data(),  e};
+  dense_simd::residual_row(avx2_, rr, 3 * med, 0, n);
   constexpr int kSide = 2 * kLag + 1;
   double acc[kSide][kSide];
   // Every other row and column: ~15 000 products per lag on a pair, the estimate's scatter ~0.01.
@@ -303,21 +302,25 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   float* zz = chan_.data() + 6 * n;
   float* zh = chan_.data() + 7 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  sp.each(
-      [&](std::size_t i) { z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f; });
+  for (int y = 0; y < h_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    dense_simd::centre_row(avx2_, ch + row, ch + 3 * n + row, S + 3 * n + row, S + row, z + row, zz + row,
+                           zh + row, span_lo_[static_cast<std::size_t>(y)],
+                           span_hi_[static_cast<std::size_t>(y)]);
+  }
   // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
   // over whole rows: plain multiply-adds the compiler vectorises.
-  sp.each([&](std::size_t i) {
-    zz[i] = z[i] * z[i];
-    zh[i] = 0;
-  });
   dense_simd::filter_lags(avx2_, z, zh, rho_.data(), kLag, sp);
   sp.each([&](std::size_t i) { zh[i] *= z[i]; });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
   dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, s_.radius);
   dense_simd::box_sum(avx2_, zh, szh, scratch_.data(), sp, s_.radius);
-  sp.each([&](std::size_t i) { kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f; });
+  for (int y = 0; y < h_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    dense_simd::kappa_row(avx2_, szz + row, szh + row, kappa_px_.data() + row,
+                          span_lo_[static_cast<std::size_t>(y)], span_hi_[static_cast<std::size_t>(y)]);
+  }
   std::size_t k = 0;
   sp.each([&](std::size_t i) {
     if (std::isfinite(d_[i]) && ch[i] > 0) line_copy_[k++] = kappa_px_[i];

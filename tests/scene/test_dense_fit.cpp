@@ -231,5 +231,55 @@ TEST(DenseKernels, UpdateRowGivesThePlainLoopsBits) {
   }
 }
 
+// correlation()'s steps against their plain loops: the residual's gate (no data, no disparity, s2
+// at and around the double limit, which no float equals), the centring and kappa, odd spans.
+TEST(DenseKernels, CorrelationRowsGiveThePlainLoopsBits) {
+  std::mt19937 rng(25);
+  constexpr int w = 61;
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  const double lim = 3 * 1.2345678901234;  // between two floats
+  const float near = static_cast<float>(lim);
+  const float below = near > lim ? std::nextafter(near, 0.f) : near, above = std::nextafter(below, 10.f);
+  ASSERT_TRUE(below < lim && above > lim);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<float> p[9];
+    for (auto& v : p) v.resize(w);
+    for (int x = 0; x < w; ++x) {
+      for (int k = 0; k < 9; ++k) p[k][x] = 20 * u(rng);
+      p[0][x] = x % 7 == 1 ? 0.f : x % 7 == 2 ? 3.f : 1.f;                 // m; N for the centring
+      p[4][x] = x % 11 == 3 ? NAN : x % 13 == 5 ? INFINITY : p[4][x];      // d
+      p[5][x] = x % 3 == 0 ? below : x % 3 == 1 ? above : 4 + 3 * u(rng);  // s2
+      if (x % 5 == 4) p[6][x] = 0.f;                                       // szz (kappa)
+    }
+    const int lo = static_cast<int>(rng() % 10), hi = lo + static_cast<int>(rng() % (w - lo + 1));
+    std::vector<float> we(w, -7.f), wz(w, -7.f), wzz(w, -7.f), wzh(w, -7.f), wk(w, -7.f);
+    for (int x = lo; x < hi; ++x) {
+      const bool use = p[0][x] > 0 && std::isfinite(p[4][x]) && p[5][x] <= lim;
+      we[x] = use ? p[6][x] * p[1][x] + p[7][x] - p[8][x] * p[3][x] - p[2][x] : 0.f;
+      wz[x] = p[0][x] > 0 ? p[3][x] - p[7][x] / std::max(1.f, p[0][x]) : 0.f;
+      wzz[x] = wz[x] * wz[x];
+      wzh[x] = 0;
+      wk[x] = p[6][x] > 0 ? std::max(0.f, p[1][x] / p[6][x]) : 1.f;
+    }
+    for (const bool avx2 : fit_kernel_builds()) {
+      std::vector<float> e(w, -7.f), z(w, -7.f), zz(w, -7.f), zh(w, -7.f), k(w, -7.f);
+      const dense_simd::ResidualRow r{p[0].data(), p[1].data(), p[2].data(), p[3].data(), p[4].data(),
+                                      p[5].data(), p[6].data(), p[7].data(), p[8].data(), e.data()};
+      dense_simd::residual_row(avx2, r, lim, static_cast<std::size_t>(lo), static_cast<std::size_t>(hi));
+      dense_simd::centre_row(avx2, p[0].data(), p[3].data(), p[7].data(), p[0].data(), z.data(), zz.data(),
+                             zh.data(), lo, hi);
+      dense_simd::kappa_row(avx2, p[6].data(), p[1].data(), k.data(), lo, hi);
+      for (int x = 0; x < w; ++x) {
+        const char* b = avx2 ? "avx2 " : "sse ";
+        ASSERT_EQ(bits_of(e[x]), bits_of(we[x])) << b << "e " << x;
+        ASSERT_EQ(bits_of(z[x]), bits_of(wz[x])) << b << "z " << x;
+        ASSERT_EQ(bits_of(zz[x]), bits_of(wzz[x])) << b << "zz " << x;
+        ASSERT_EQ(bits_of(zh[x]), bits_of(wzh[x])) << b << "zh " << x;
+        ASSERT_EQ(bits_of(k[x]), bits_of(wk[x])) << b << "kappa " << x;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace naneye::recon::scene
