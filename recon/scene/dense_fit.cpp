@@ -74,20 +74,30 @@ template <class T>
 inline __attribute__((always_inline)) void st(float* p, T v) {
   std::memcpy(p, &v, sizeof v);
 }
-inline __attribute__((always_inline)) VD wide(VF v) {
-  return __builtin_convertvector(v, VD);
+// The conversions by their AVX2 instructions: GCC splits __builtin_convertvector of 4 floats to 4
+// doubles into halves through the stack, and 64-bit masks to 32-bit ones into five shuffles.
+#define NANEYE_AVX2_INLINE inline __attribute__((always_inline, target("avx2")))
+NANEYE_AVX2_INLINE VD wide(VF v) {
+  return _mm256_cvtps_pd(v);
 }
-inline __attribute__((always_inline)) VF narrow(VD v) {
-  return __builtin_convertvector(v, VF);
+NANEYE_AVX2_INLINE VF narrow(VD v) {
+  return _mm256_cvtpd_ps(v);
 }
 // A double comparison's lanes (0 / -1 as 64 bits) as float lanes' (0 / -1 as 32 bits).
-inline __attribute__((always_inline)) VI lanes(VL m) {
-  return __builtin_convertvector(m, VI);
+NANEYE_AVX2_INLINE VI lanes(VL m) {
+  const __m256i even =
+      _mm256_permutevar8x32_epi32(reinterpret_cast<__m256i>(m), _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6));
+  return reinterpret_cast<VI>(_mm256_castsi256_si128(even));
+}
+
+// v as floats where the lane is not bad, else p's old values.
+NANEYE_AVX2_INLINE void keep(float* p, VD v, int x, VI bad) {
+  st(p + x, bad ? ld<VF>(p + x) : narrow(v));
 }
 
 // Pixels x .. x + 3: fit_one's expressions on doubles; where fit_one writes nothing, the old values
 // are stored back.
-inline __attribute__((always_inline)) void fit4(const FitRow& r, int x) {
+NANEYE_AVX2_INLINE void fit4(const FitRow& r, int x) {
   const VF zero = VF{}, N = ld<VF>(r.s[0] + x), d = ld<VF>(r.d + x);
   st(r.n + x, N);
   // d - d is NaN unless d is finite; NaN compares unequal.
@@ -106,15 +116,14 @@ inline __attribute__((always_inline)) void fit4(const FitRow& r, int x) {
   // std::max(lo, v) is v when lo < v, else lo; std::clamp(v, lo, hi) is lo when v < lo, else hi
   // when hi < v, else v: the same selects, NaN included.
   const VD s2 = (0.0 < res ? res : VD{} + 0.0) / (1.0 < dof ? dof : VD{} + 1.0);
-  auto keep = [&](float* p, VD v) { st(p + x, bad ? ld<VF>(p + x) : narrow(v)); };
-  keep(r.a, a);
-  keep(r.c, c);
-  keep(r.b, (sl - a * sw + c * sgr) * inv);
-  keep(r.s2, s2);
-  keep(r.z, Sww / det);
-  keep(r.sww, Sww);
-  keep(r.swg, Swg);
-  keep(r.sgg, Sgg);
+  keep(r.a, a, x, bad);
+  keep(r.c, c, x, bad);
+  keep(r.b, (sl - a * sw + c * sgr) * inv, x, bad);
+  keep(r.s2, s2, x, bad);
+  keep(r.z, Sww / det, x, bad);
+  keep(r.sww, Sww, x, bad);
+  keep(r.swg, Swg, x, bad);
+  keep(r.sgg, Sgg, x, bad);
   const VI ok = ~bad & lanes(a > 0.0);
   VD q = c / a;
   q = q < -0.5 ? VD{} - 0.5 : 0.5 < q ? VD{} + 0.5 : q;
@@ -125,7 +134,10 @@ inline __attribute__((always_inline)) void fit4(const FitRow& r, int x) {
 void fit_row_sse(const FitRow& r) {
   for (int x = r.lo; x < r.hi; ++x) fit_one(r, x);
 }
-__attribute__((target("avx2"))) void fit_row_avx2(const FitRow& r) {
+// A local copy of the row's pointers: the kernels' stores (memcpy) could otherwise write them, and
+// every one would be reloaded after each store.
+__attribute__((target("avx2"))) void fit_row_avx2(const FitRow& row) {
+  const FitRow r = row;
   int x = r.lo;
   for (; x + 4 <= r.hi; x += 4) fit4(r, x);
   for (; x < r.hi; ++x) fit_one(r, x);
@@ -146,7 +158,7 @@ inline void detail_one(const DetailRow& r, int x) {
   const double ggq_c = r.s[8][x] - sg * inv * r.sgq[x];
   r.out[x] = det > 0 ? static_cast<float>((Sww * ggq_c - Swg * wgq_c) / det) : 0.f;
 }
-inline __attribute__((always_inline)) void detail4(const DetailRow& r, int x) {
+NANEYE_AVX2_INLINE void detail4(const DetailRow& r, int x) {
   const VD N = wide(ld<VF>(r.s[0] + x)), inv = 1.0 / N;
   const VD sw = wide(ld<VF>(r.s[1] + x)), sg = wide(ld<VF>(r.s[3] + x)), sgq = wide(ld<VF>(r.sgq + x));
   const VD Sww = wide(ld<VF>(r.s[4] + x)) - sw * sw * inv, Sgg = wide(ld<VF>(r.s[5] + x)) - sg * sg * inv;
@@ -160,7 +172,8 @@ inline __attribute__((always_inline)) void detail4(const DetailRow& r, int x) {
 void detail_row_sse(const DetailRow& r) {
   for (int x = r.lo; x < r.hi; ++x) detail_one(r, x);
 }
-__attribute__((target("avx2"))) void detail_row_avx2(const DetailRow& r) {
+__attribute__((target("avx2"))) void detail_row_avx2(const DetailRow& row) {
+  const DetailRow r = row;  // as in fit_row_avx2
   int x = r.lo;
   for (; x + 4 <= r.hi; x += 4) detail4(r, x);
   for (; x < r.hi; ++x) detail_one(r, x);
@@ -336,5 +349,7 @@ void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* mo
 }
 
 }  // namespace naneye::recon::scene::dense_simd
+
+#undef NANEYE_AVX2_INLINE
 
 #pragma GCC diagnostic pop
