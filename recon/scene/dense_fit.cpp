@@ -193,7 +193,8 @@ void update_row_sse(const UpdateRow& r) {
   for (int x = r.lo; x < r.hi; ++x) update_one(r, x);
 }
 // sqrt and the absolute values by instructions (both exact: the scalar code's bits).
-__attribute__((target("avx2"))) void update_row_avx2(const UpdateRow& r) {
+__attribute__((target("avx2"))) void update_row_avx2(const UpdateRow& row) {
+  const UpdateRow r = row;  // as in fit_row_avx2
   const __m256 sign = _mm256_set1_ps(-0.f), zero = _mm256_setzero_ps();
   int x = r.lo;
   for (; x + 8 <= r.hi; x += 8) {

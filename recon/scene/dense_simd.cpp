@@ -328,7 +328,10 @@ __attribute__((target("avx2"))) void filter_lags_avx2(const float* z, float* out
                                                       const Spans& sp) {
   filter_lags_v<simd::V8>(z, out, rho, lag, sp);
 }
-void gather_row_sse(const GatherRow& g) {
+// The row structs are copied in: every store (memcpy, or an intrinsic's may-alias type) could write
+// the caller's pointers, which would then be reloaded after each one.
+void gather_row_sse(const GatherRow& row) {
+  const GatherRow g = row;
   Taps p;
   for (int x = g.lo; x < g.hi; x += 4) {
     const int count = std::min(4, g.hi - x);
@@ -337,7 +340,8 @@ void gather_row_sse(const GatherRow& g) {
   }
 }
 // pick_avx2 is called here, not from a template: GCC inlines an AVX2 function only into another.
-__attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& g) {
+__attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& row) {
+  const GatherRow g = row;
   Taps p;
   for (int x = g.lo; x < g.hi; x += 8) {
     const int count = std::min(8, g.hi - x);
@@ -355,10 +359,12 @@ __attribute__((target("avx2"))) void lag_products_avx2(const float* e, int w, in
   lag_products_v<simd::V8>(e, w, h, acc);
 }
 void step_row_sse(const StepRow& r) {
-  step_row_v<simd::V4>(r);
+  const StepRow copy = r;
+  step_row_v<simd::V4>(copy);
 }
 __attribute__((target("avx2"))) void step_row_avx2(const StepRow& r) {
-  step_row_v<simd::V8>(r);
+  const StepRow copy = r;
+  step_row_v<simd::V8>(copy);
 }
 }  // namespace
 
