@@ -25,6 +25,30 @@ constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
 
+// f.template operator()<T>(i) on the spans' pixels: T four floats (an SSE2 vector: the x86-64
+// baseline) where four pixels of the row remain, else float. For element-wise steps written once for
+// both, so the lanes and the tails compute the same expressions: the plain loop's bits.
+using F4 = float __attribute__((vector_size(16)));
+template <class T>
+inline T get4(const float* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class T>
+inline void put4(float* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+template <class F>
+void each4(const Spans& sp, F&& f) {
+  for (int y = 0; y < sp.h; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * sp.w;
+    int x = sp.lo[y];
+    for (; x + 4 <= sp.hi[y]; x += 4) f.template operator()<F4>(row + x);
+    for (; x < sp.hi[y]; ++x) f.template operator()<float>(row + x);
+  }
+}
+
 }  // namespace
 
 void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat&, bool last) {
@@ -222,14 +246,18 @@ void RectifiedMatcher::reference_detail() {
   float* bval = chan_.data() + 6 * n;
   float* bcnt = chan_.data() + 9 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  sp.each([&](std::size_t i) {
-    const bool ok = std::isfinite(d_[i]);
-    val[i] = ok ? d_[i] : 0.f;
-    cnt[i] = ok ? 1.f : 0.f;
+  const float* d = d_.data();
+  each4(sp, [&]<class T>(std::size_t i) {
+    const T di = get4<T>(d + i);
+    const auto ok = di - di == 0.f;  // finite
+    put4(val + i, ok ? di : T{});
+    put4(cnt + i, ok ? T{} + 1.f : T{});
   });
   dense_simd::box_sum(avx2_, val, bval, scratch_.data(), sp, 2 * s_.radius);
   dense_simd::box_sum(avx2_, cnt, bcnt, scratch_.data(), sp, 2 * s_.radius);
-  sp.each([&](std::size_t i) { val[i] = cnt[i] > 0 ? d_[i] - bval[i] / bcnt[i] : 0.f; });
+  each4(sp, [&]<class T>(std::size_t i) {
+    put4(val + i, get4<T>(cnt + i) > 0.f ? get4<T>(d + i) - get4<T>(bval + i) / get4<T>(bcnt + i) : T{});
+  });
 }
 
 const float* RectifiedMatcher::window_detail() {
@@ -240,11 +268,11 @@ const float* RectifiedMatcher::window_detail() {
   float* ggq = chan_.data() + 8 * n;
   float* gq = chan_.data() + 9 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  sp.each([&](std::size_t i) {
-    const float g = ch[3 * n + i];
-    gq[i] = g * q[i];
-    wgq[i] = ch[n + i] * gq[i];
-    ggq[i] = g * gq[i];
+  each4(sp, [&]<class T>(std::size_t i) {
+    const T g = get4<T>(ch + 3 * n + i), gqi = g * get4<T>(q + i);
+    put4(gq + i, gqi);
+    put4(wgq + i, get4<T>(ch + n + i) * gqi);
+    put4(ggq + i, g * gqi);
   });
   // The fit's own sums (0 N, 1 W, 3 G, 4 WW, 5 GG, 6 WG) are read here, 2 and 9 by validate()'s
   // window features: only 7 and 8 are free after the fit, and line_copy_ until correlation().
@@ -311,7 +339,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
   // over whole rows: plain multiply-adds the compiler vectorises.
   dense_simd::filter_lags(avx2_, z, zh, rho_.data(), kLag, sp);
-  sp.each([&](std::size_t i) { zh[i] *= z[i]; });
+  each4(sp, [&]<class T>(std::size_t i) { put4(zh + i, get4<T>(zh + i) * get4<T>(z + i)); });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
   dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, s_.radius);
