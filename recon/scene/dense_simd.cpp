@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <type_traits>
 
 #include <immintrin.h>
@@ -55,6 +54,15 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
         store(tmp + x, acc);
       }
     }
+    // The last columns as one more vector (the scalar tail was ~2 M instructions a pair), ending at
+    // most at the row's end: it sums again columns already summed (the same sums) or sums columns
+    // beyond c1, which nothing reads.
+    if (const int xv = std::min(x, w - L); x < c1 && xv >= 0) {
+      V acc = load<V>(first + xv);
+      for (int yy = y0 + 1; yy <= y1; ++yy) acc += load<V>(in + static_cast<std::size_t>(yy) * w + xv);
+      store(tmp + xv, acc);
+      x = c1;
+    }
     for (; x < c1; ++x) {
       float acc = first[x];
       for (int yy = y0 + 1; yy <= y1; ++yy) acc += in[static_cast<std::size_t>(yy) * w + x];
@@ -74,6 +82,14 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
 #pragma GCC unroll 16
       for (int k = 1 - r; k <= r; ++k) acc += load<V>(tmp + x + k);
       store(o + x, acc);
+    }
+    if (x < i1 && x + L + r <= w) {  // the tail's lanes, the ones beyond i1 dropped
+      V acc = load<V>(tmp + x - r);
+      for (int k = 1 - r; k <= r; ++k) acc += load<V>(tmp + x + k);
+      alignas(32) float lanes[L];
+      store(lanes, acc);
+      std::copy(lanes, lanes + (i1 - x), o + x);
+      x = i1;
     }
     for (; x < i1; ++x) {
       float acc = tmp[x - r];
@@ -250,70 +266,6 @@ NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, const Taps& p, int x, i
     }
 }
 
-// The step in the scalar expressions' order, on whole vectors; every branch a select (the lanes
-// that fail compute values no output keeps). s[0..8], m: the sums and mask at the block's first pixel.
-template <class V>
-NANEYE_SIMD_INLINE void step_lanes(const float* const s[9], const float* m_at, const V& d, V& out, V& solved,
-                                   V& refused) {
-  using VI = simd::VInt<V>;
-  const V N = load<V>(s[0]), sw = load<V>(s[1]), sl = load<V>(s[2]), sg = load<V>(s[3]);
-  const V inv = 1.f / N;
-  const V Sww = load<V>(s[4]) - sw * sw * inv, Sgg = load<V>(s[5]) - sg * sg * inv;
-  const V Swg = load<V>(s[6]) - sw * sg * inv, Swl = load<V>(s[7]) - sw * sl * inv;
-  const V Sgl = load<V>(s[8]) - sg * sl * inv;
-  const V det = Sww * Sgg - Swg * Swg;
-  const V na = Sgg * Swl - Swg * Sgl, nc = Swg * Swl - Sww * Sgl;
-  const V zero = V{}, one = zero + 1.f, half = zero + 0.5f;
-  // d - d is NaN unless d is finite; NaN compares unequal.
-  const VI bad = (d - d != zero) | (load<V>(m_at) == zero) | (N < 4.f) | ~(det > zero);
-  const VI ok = ~bad & (na > zero);
-  V q = nc / na;
-  q = q < -half ? -half : half < q ? half : q;
-  solved = ok ? one : zero;
-  refused = bad ? one : zero;
-  out = ok ? d + q : zero;
-}
-
-template <class V>
-NANEYE_SIMD_INLINE void step_row_v(const StepRow& r) {
-  constexpr int L = kLanes<V>;
-  const V nan = V{} + std::numeric_limits<float>::quiet_NaN();
-  int x = r.lo;
-  for (; x + L <= r.hi; x += L) {
-    const float* s[9];
-    for (int k = 0; k < 9; ++k) s[k] = r.s[k] + x;
-    V out, solved, refused;
-    const V d = load<V>(r.d + x);
-    step_lanes<V>(s, r.m + x, d, out, solved, refused);
-    store(r.out + x, out);
-    store(r.solved + x, solved);
-    store(r.d + x, refused > 0.f ? nan : d);
-  }
-  if (x < r.hi) {  // the tail: the same lanes on a zero-padded copy
-    const int count = r.hi - x;
-    alignas(32) float buf[11][L] = {};
-    const float* s[9];
-    for (int k = 0; k < 9; ++k) {
-      std::copy(r.s[k] + x, r.s[k] + r.hi, buf[k]);
-      s[k] = buf[k];
-    }
-    std::copy(r.m + x, r.m + r.hi, buf[9]);
-    std::copy(r.d + x, r.d + r.hi, buf[10]);
-    V out, solved, refused;
-    const V d = load<V>(buf[10]);
-    alignas(32) float o[L], sv[L], rv[L];
-    step_lanes<V>(s, buf[9], d, out, solved, refused);
-    store(o, out);
-    store(sv, solved);
-    store(rv, refused);
-    for (int j = 0; j < count; ++j) {
-      r.out[x + j] = o[j];
-      r.solved[x + j] = sv[j];
-      if (rv[j] > 0) r.d[x + j] = std::numeric_limits<float>::quiet_NaN();
-    }
-  }
-}
-
 void box_sum_sse(const float* in, float* out, float* tmp, const Spans& sp, int r) {
   box_sum_any<simd::V4>(in, out, tmp, sp, r);
 }
@@ -358,14 +310,6 @@ void lag_products_sse(const float* e, int w, int h, double* acc) {
 __attribute__((target("avx2"))) void lag_products_avx2(const float* e, int w, int h, double* acc) {
   lag_products_v<simd::V8>(e, w, h, acc);
 }
-void step_row_sse(const StepRow& r) {
-  const StepRow copy = r;
-  step_row_v<simd::V4>(copy);
-}
-__attribute__((target("avx2"))) void step_row_avx2(const StepRow& r) {
-  const StepRow copy = r;
-  step_row_v<simd::V8>(copy);
-}
 }  // namespace
 
 bool avx2_available() {
@@ -386,10 +330,6 @@ void gather_row(bool avx2, const GatherRow& g) {
 
 void lag_products(bool avx2, const float* e, int w, int h, double acc[49]) {
   (avx2 ? lag_products_avx2 : lag_products_sse)(e, w, h, acc);
-}
-
-void step_row(bool avx2, const StepRow& r) {
-  (avx2 ? step_row_avx2 : step_row_sse)(r);
 }
 
 }  // namespace naneye::recon::scene::dense_simd

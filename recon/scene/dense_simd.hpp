@@ -54,8 +54,8 @@ struct GatherRow {
 };
 void gather_row(bool avx2, const GatherRow& g);
 
-// One row of an earlier Gauss-Newton iteration's step (RectifiedMatcher::refine), in float, over
-// columns [lo, hi): from the window sums N, W, L, G, WW, GG, WG, WL, GL (s[0..8] at this row) the
+// One row of an earlier Gauss-Newton iteration's step (RectifiedMatcher::refine; dense_step.cpp), in
+// float, over columns [lo, hi): from the window sums N, W, L, G, WW, GG, WG, WL, GL (s[0..8] at this row) the
 // centred 2 x 2 system, its step nc / na clamped to half a pixel. Per pixel: no disparity (d NaN),
 // no data (m == 0) or fewer than 4 window pixels, or det <= 0: d = NaN, out = solved = 0; na <= 0
 // (anti-correlated): out = solved = 0; else out = d + step, solved = 1.
