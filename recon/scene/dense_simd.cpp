@@ -196,8 +196,8 @@ NANEYE_SIMD_INLINE void pick_lanes(const GatherRow& g, int x, int count, Taps& p
 // The same for 8 whole lanes in AVX2, the same float operations per lane: the position, floor and
 // range tests on vectors, each lane's four taps one 16-byte load (they are contiguous), transposed
 // into the four tap vectors. Lanes without taps load from column 1 (always inside the row, w >= 4)
-// and are masked to zero. No hardware gathers: on this AMD EPYC they gave half the instructions but
-// no time (docs/scene.md, 2026-12-04 night); loads and shuffles are cheap everywhere.
+// and are masked to zero. No gathers for the taps: on this AMD EPYC five per block gave half the
+// instructions but no time (docs/scene.md, 2026-12-04 night); loads and shuffles are cheap.
 __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRow& g, int x, Taps& p) {
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256 d = _mm256_loadu_ps(g.d + x);
@@ -209,12 +209,16 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRo
                                           _mm256_cmpgt_epi32(_mm256_set1_epi32(g.w - 2), i0));
   const __m256i ok = _mm256_and_si256(_mm256_castps_si256(finite), in_row);
   alignas(32) int idx[8];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(idx), _mm256_blendv_epi8(_mm256_set1_epi32(1), i0, ok));
-  int bits = 0;
-  for (int j = 0; j < 8; ++j) bits |= (g.taps_ok[idx[j]] != 0 ? 1 : 0) << j;
-  const __m256i bit = _mm256_sllv_epi32(_mm256_set1_epi32(1), lane);
-  const __m256 mask = _mm256_castsi256_ps(
-      _mm256_and_si256(ok, _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits), bit), bit)));
+  const __m256i at = _mm256_blendv_epi8(_mm256_set1_epi32(1), i0, ok);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(idx), at);
+  // taps_ok[i0] of the lanes in the row by one masked gather of 32 bits at byte i0 - 1 (bytes i0 - 1
+  // .. i0 + 2, all inside the row; the other lanes read nothing): its second byte. One instruction
+  // where eight scalar loads and bit inserts took ~35 (~3 M instructions a pair).
+  const __m256i word =
+      _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(g.taps_ok),
+                                  _mm256_sub_epi32(at, _mm256_set1_epi32(1)), ok, 1);
+  const __m256 mask = _mm256_castsi256_ps(_mm256_andnot_si256(
+      _mm256_cmpeq_epi32(_mm256_and_si256(word, _mm256_set1_epi32(0xff00)), _mm256_setzero_si256()), ok));
   const float* r = g.right - 1;
   __m256 a[4];
   for (int k = 0; k < 4; ++k)
