@@ -140,9 +140,9 @@ void RectifiedMatcher::level_medians(float min_n) {
     // and std::nth_element over the 64 bins was ~2 % of the dense path's time in perf.
     float* first = scratch_.data() + start[b];
     const auto ucnt = static_cast<std::size_t>(cnt);
-    const float med = kth_smallest(first, ucnt, ucnt / 2, select_hist_);
-    const float low =
-        kth_smallest(first, ucnt, static_cast<std::size_t>(kResidualLowerQuantile * cnt), select_hist_);
+    float med, low;
+    kth_smallest_pair(first, ucnt, ucnt / 2, static_cast<std::size_t>(kResidualLowerQuantile * cnt),
+                      select_hist_, med, low);
     bin_median_[b] = med;
     bin_nu_[b] = static_cast<float>(effective_dof(low, med));
   }
@@ -152,11 +152,11 @@ void RectifiedMatcher::level_medians(float min_n) {
   global_nu_ = 0;
   if (all > 0) {
     const auto n = static_cast<std::size_t>(all);
-    global_median_ = kth_smallest(scratch_.data(), n, n / 2, select_hist_);
-    global_nu_ =
-        effective_dof(kth_smallest(scratch_.data(), n, static_cast<std::size_t>(kResidualLowerQuantile * all),
-                                   select_hist_),
-                      global_median_);
+    float med, low;
+    kth_smallest_pair(scratch_.data(), n, n / 2, static_cast<std::size_t>(kResidualLowerQuantile * all),
+                      select_hist_, med, low);
+    global_median_ = med;
+    global_nu_ = effective_dof(low, global_median_);
     residual_sigma_ = std::sqrt(global_median_);
   }
 }

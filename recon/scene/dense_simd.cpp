@@ -4,8 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <type_traits>
+
+#include <immintrin.h>
 
 #include "../corners/simd.hpp"
 
@@ -53,6 +54,15 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
         store(tmp + x, acc);
       }
     }
+    // The last columns as one more vector (the scalar tail was ~2 M instructions a pair), ending at
+    // most at the row's end: it sums again columns already summed (the same sums) or sums columns
+    // beyond c1, which nothing reads.
+    if (const int xv = std::min(x, w - L); x < c1 && xv >= 0) {
+      V acc = load<V>(first + xv);
+      for (int yy = y0 + 1; yy <= y1; ++yy) acc += load<V>(in + static_cast<std::size_t>(yy) * w + xv);
+      store(tmp + xv, acc);
+      x = c1;
+    }
     for (; x < c1; ++x) {
       float acc = first[x];
       for (int yy = y0 + 1; yy <= y1; ++yy) acc += in[static_cast<std::size_t>(yy) * w + x];
@@ -72,6 +82,14 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
 #pragma GCC unroll 16
       for (int k = 1 - r; k <= r; ++k) acc += load<V>(tmp + x + k);
       store(o + x, acc);
+    }
+    if (x < i1 && x + L + r <= w) {  // the tail's lanes, the ones beyond i1 dropped
+      V acc = load<V>(tmp + x - r);
+      for (int k = 1 - r; k <= r; ++k) acc += load<V>(tmp + x + k);
+      alignas(32) float lanes[L];
+      store(lanes, acc);
+      std::copy(lanes, lanes + (i1 - x), o + x);
+      x = i1;
     }
     for (; x < i1; ++x) {
       float acc = tmp[x - r];
@@ -153,36 +171,83 @@ NANEYE_SIMD_INLINE void lag_products_v(const float* e, int w, int h, double* acc
     for (int dx = 0; dx < kSide; ++dx) acc[dy * kSide + dx] = a[dy][dx / H][dx % H];
 }
 
-// Lanes of L pixels: the taps are picked per pixel (each its own position), the Keys weights and the
-// ten products computed on whole vectors, with the scalar code's expressions term by term.
-template <class V>
-NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, int x, int count, float out[10][kLanes<V>]) {
-  constexpr int L = kLanes<V>;
-  alignas(32) float T[L], R0[L], R1[L], R2[L], R3[L], Lv[L], M[L];
+// A block's taps and left pixels, less mu, its offsets t from tap 0 and its mask (all zero where
+// the pixel has no four valid taps or lies beyond `count`): per lane, in scalar code.
+struct Taps {
+  alignas(32) float T[8], R[4][8], Lv[8], M[8];
+};
+template <int L>
+NANEYE_SIMD_INLINE void pick_lanes(const GatherRow& g, int x, int count, Taps& p) {
   for (int j = 0; j < L; ++j) {
-    T[j] = R0[j] = R1[j] = R2[j] = R3[j] = Lv[j] = M[j] = 0.f;
+    p.T[j] = p.R[0][j] = p.R[1][j] = p.R[2][j] = p.R[3][j] = p.Lv[j] = p.M[j] = 0.f;
     if (j >= count) continue;
     const float d = g.d[x + j];
     if (!std::isfinite(d)) continue;
     const float xs = static_cast<float>(x + j) - d;
     const int i0 = static_cast<int>(std::floor(xs));
     if (i0 < 1 || i0 + 2 >= g.w || !g.taps_ok[i0]) continue;
-    T[j] = xs - static_cast<float>(i0);
-    R0[j] = g.right[i0 - 1] - g.mu;
-    R1[j] = g.right[i0] - g.mu;
-    R2[j] = g.right[i0 + 1] - g.mu;
-    R3[j] = g.right[i0 + 2] - g.mu;
-    Lv[j] = g.left[x + j] - g.mu;
-    M[j] = 1.f;
+    p.T[j] = xs - static_cast<float>(i0);
+    for (int k = 0; k < 4; ++k) p.R[k][j] = g.right[i0 - 1 + k] - g.mu;
+    p.Lv[j] = g.left[x + j] - g.mu;
+    p.M[j] = 1.f;
   }
+}
+
+// The same for 8 whole lanes in AVX2, the same float operations per lane: the position, floor and
+// range tests on vectors, each lane's four taps one 16-byte load (they are contiguous), transposed
+// into the four tap vectors. Lanes without taps load from column 1 (always inside the row, w >= 4)
+// and are masked to zero. No gathers for the taps: on this AMD EPYC five per block gave half the
+// instructions but no time (docs/scene.md, 2026-12-04 night); loads and shuffles are cheap.
+__attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRow& g, int x, Taps& p) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 d = _mm256_loadu_ps(g.d + x);
+  const __m256 xs = _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(x), lane)), d);
+  // cvttps gives INT_MIN beyond int's range, as the scalar conversion does on x86: refused by i0 >= 1.
+  const __m256i i0 = _mm256_cvttps_epi32(_mm256_floor_ps(xs));
+  const __m256 finite = _mm256_cmp_ps(_mm256_sub_ps(d, d), _mm256_setzero_ps(), _CMP_EQ_OQ);
+  const __m256i in_row = _mm256_and_si256(_mm256_cmpgt_epi32(i0, _mm256_setzero_si256()),
+                                          _mm256_cmpgt_epi32(_mm256_set1_epi32(g.w - 2), i0));
+  const __m256i ok = _mm256_and_si256(_mm256_castps_si256(finite), in_row);
+  alignas(32) int idx[8];
+  const __m256i at = _mm256_blendv_epi8(_mm256_set1_epi32(1), i0, ok);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(idx), at);
+  // taps_ok[i0] of the lanes in the row by one masked gather of 32 bits at byte i0 - 1 (bytes i0 - 1
+  // .. i0 + 2, all inside the row; the other lanes read nothing): its second byte. One instruction
+  // where eight scalar loads and bit inserts took ~35 (~3 M instructions a pair).
+  const __m256i word =
+      _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(g.taps_ok),
+                                  _mm256_sub_epi32(at, _mm256_set1_epi32(1)), ok, 1);
+  const __m256 mask = _mm256_castsi256_ps(_mm256_andnot_si256(
+      _mm256_cmpeq_epi32(_mm256_and_si256(word, _mm256_set1_epi32(0xff00)), _mm256_setzero_si256()), ok));
+  const float* r = g.right - 1;
+  __m256 a[4];
+  for (int k = 0; k < 4; ++k)
+    a[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(r + idx[k])),
+                                _mm_loadu_ps(r + idx[k + 4]), 1);
+  const __m256 t0 = _mm256_unpacklo_ps(a[0], a[1]), t1 = _mm256_unpackhi_ps(a[0], a[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(a[2], a[3]), t3 = _mm256_unpackhi_ps(a[2], a[3]);
+  const __m256 tap[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xee),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xee)};
+  const __m256 mu = _mm256_set1_ps(g.mu);
+  _mm256_store_ps(p.T, _mm256_and_ps(mask, _mm256_sub_ps(xs, _mm256_cvtepi32_ps(i0))));
+  for (int k = 0; k < 4; ++k) _mm256_store_ps(p.R[k], _mm256_and_ps(mask, _mm256_sub_ps(tap[k], mu)));
+  _mm256_store_ps(p.Lv, _mm256_and_ps(mask, _mm256_sub_ps(_mm256_loadu_ps(g.left + x), mu)));
+  _mm256_store_ps(p.M, _mm256_and_ps(mask, _mm256_set1_ps(1.f)));
+}
+
+// The Keys weights and the ten products of a block of L picked pixels on whole vectors, with the
+// scalar code's expressions term by term; stored to the row's channels at x (count lanes).
+template <class V>
+NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, const Taps& p, int x, int count) {
+  constexpr int L = kLanes<V>;
   // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
   // from tap 0, for taps -1, 0, 1, 2.
-  const V t = load<V>(T), t2 = t * t, t3 = t2 * t;
+  const V t = load<V>(p.T), t2 = t * t, t3 = t2 * t;
   const V w0 = -0.5f * t3 + t2 - 0.5f * t, w1 = 1.5f * t3 - 2.5f * t2 + 1.f;
   const V w2 = -1.5f * t3 + 2.f * t2 + 0.5f * t, w3 = 0.5f * t3 - 0.5f * t2;
   const V dw0 = -1.5f * t2 + 2.f * t - 0.5f, dw1 = 4.5f * t2 - 5.f * t;
   const V dw2 = -4.5f * t2 + 4.f * t + 0.5f, dw3 = 1.5f * t2 - t;
-  const V r0 = load<V>(R0), r1 = load<V>(R1), r2 = load<V>(R2), r3 = load<V>(R3);
+  const V r0 = load<V>(p.R[0]), r1 = load<V>(p.R[1]), r2 = load<V>(p.R[2]), r3 = load<V>(p.R[3]);
   V W = V{}, G = V{};
   W += w0 * r0;
   W += w1 * r1;
@@ -192,96 +257,17 @@ NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, int x, int count, float
   G += dw1 * r1;
   G += dw2 * r2;
   G += dw3 * r3;
-  const V m = load<V>(M), l = load<V>(Lv);
-  store(out[0], m);
-  store(out[1], m * W);
-  store(out[2], m * l);
-  store(out[3], m * G);
-  store(out[4], m * W * W);
-  store(out[5], m * G * G);
-  store(out[6], m * W * G);
-  store(out[7], m * W * l);
-  store(out[8], m * G * l);
-  store(out[9], m * l * l);
-}
-
-template <class V>
-NANEYE_SIMD_INLINE void gather_row_v(const GatherRow& g) {
-  constexpr int L = kLanes<V>;
-  alignas(32) float out[10][L];
-  for (int x = g.lo; x < g.hi; x += L) {
-    const int count = std::min(L, g.hi - x);
-    gather_block<V>(g, x, count, out);
-    for (int c = 0; c < 10; ++c)
-      if (count == L)
-        store(g.ch[c] + x, load<V>(out[c]));
-      else
-        for (int j = 0; j < count; ++j) g.ch[c][x + j] = out[c][j];
-  }
-}
-
-// The step in the scalar expressions' order, on whole vectors; every branch a select (the lanes
-// that fail compute values no output keeps). s[0..8], m: the sums and mask at the block's first pixel.
-template <class V>
-NANEYE_SIMD_INLINE void step_lanes(const float* const s[9], const float* m_at, const V& d, V& out, V& solved,
-                                   V& refused) {
-  using VI = simd::VInt<V>;
-  const V N = load<V>(s[0]), sw = load<V>(s[1]), sl = load<V>(s[2]), sg = load<V>(s[3]);
-  const V inv = 1.f / N;
-  const V Sww = load<V>(s[4]) - sw * sw * inv, Sgg = load<V>(s[5]) - sg * sg * inv;
-  const V Swg = load<V>(s[6]) - sw * sg * inv, Swl = load<V>(s[7]) - sw * sl * inv;
-  const V Sgl = load<V>(s[8]) - sg * sl * inv;
-  const V det = Sww * Sgg - Swg * Swg;
-  const V na = Sgg * Swl - Swg * Sgl, nc = Swg * Swl - Sww * Sgl;
-  const V zero = V{}, one = zero + 1.f, half = zero + 0.5f;
-  // d - d is NaN unless d is finite; NaN compares unequal.
-  const VI bad = (d - d != zero) | (load<V>(m_at) == zero) | (N < 4.f) | ~(det > zero);
-  const VI ok = ~bad & (na > zero);
-  V q = nc / na;
-  q = q < -half ? -half : half < q ? half : q;
-  solved = ok ? one : zero;
-  refused = bad ? one : zero;
-  out = ok ? d + q : zero;
-}
-
-template <class V>
-NANEYE_SIMD_INLINE void step_row_v(const StepRow& r) {
-  constexpr int L = kLanes<V>;
-  const V nan = V{} + std::numeric_limits<float>::quiet_NaN();
-  int x = r.lo;
-  for (; x + L <= r.hi; x += L) {
-    const float* s[9];
-    for (int k = 0; k < 9; ++k) s[k] = r.s[k] + x;
-    V out, solved, refused;
-    const V d = load<V>(r.d + x);
-    step_lanes<V>(s, r.m + x, d, out, solved, refused);
-    store(r.out + x, out);
-    store(r.solved + x, solved);
-    store(r.d + x, refused > 0.f ? nan : d);
-  }
-  if (x < r.hi) {  // the tail: the same lanes on a zero-padded copy
-    const int count = r.hi - x;
-    alignas(32) float buf[11][L] = {};
-    const float* s[9];
-    for (int k = 0; k < 9; ++k) {
-      std::copy(r.s[k] + x, r.s[k] + r.hi, buf[k]);
-      s[k] = buf[k];
+  const V m = load<V>(p.M), l = load<V>(p.Lv);
+  const V out[10] = {m,         m * W,     m * l,     m * G,     m * W * W,
+                     m * G * G, m * W * G, m * W * l, m * G * l, m * l * l};
+  for (int c = 0; c < 10; ++c)
+    if (count == L) {
+      store(g.ch[c] + x, out[c]);
+    } else {
+      alignas(32) float o[L];
+      store(o, out[c]);
+      for (int j = 0; j < count; ++j) g.ch[c][x + j] = o[j];
     }
-    std::copy(r.m + x, r.m + r.hi, buf[9]);
-    std::copy(r.d + x, r.d + r.hi, buf[10]);
-    V out, solved, refused;
-    const V d = load<V>(buf[10]);
-    alignas(32) float o[L], sv[L], rv[L];
-    step_lanes<V>(s, buf[9], d, out, solved, refused);
-    store(o, out);
-    store(sv, solved);
-    store(rv, refused);
-    for (int j = 0; j < count; ++j) {
-      r.out[x + j] = o[j];
-      r.solved[x + j] = sv[j];
-      if (rv[j] > 0) r.d[x + j] = std::numeric_limits<float>::quiet_NaN();
-    }
-  }
 }
 
 void box_sum_sse(const float* in, float* out, float* tmp, const Spans& sp, int r) {
@@ -298,23 +284,35 @@ __attribute__((target("avx2"))) void filter_lags_avx2(const float* z, float* out
                                                       const Spans& sp) {
   filter_lags_v<simd::V8>(z, out, rho, lag, sp);
 }
-void gather_row_sse(const GatherRow& g) {
-  gather_row_v<simd::V4>(g);
+// The row structs are copied in: every store (memcpy, or an intrinsic's may-alias type) could write
+// the caller's pointers, which would then be reloaded after each one.
+void gather_row_sse(const GatherRow& row) {
+  const GatherRow g = row;
+  Taps p;
+  for (int x = g.lo; x < g.hi; x += 4) {
+    const int count = std::min(4, g.hi - x);
+    pick_lanes<4>(g, x, count, p);
+    gather_block<simd::V4>(g, p, x, count);
+  }
 }
-__attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& g) {
-  gather_row_v<simd::V8>(g);
+// pick_avx2 is called here, not from a template: GCC inlines an AVX2 function only into another.
+__attribute__((target("avx2"))) void gather_row_avx2(const GatherRow& row) {
+  const GatherRow g = row;
+  Taps p;
+  for (int x = g.lo; x < g.hi; x += 8) {
+    const int count = std::min(8, g.hi - x);
+    if (count == 8 && g.w >= 4)
+      pick_avx2(g, x, p);
+    else
+      pick_lanes<8>(g, x, count, p);
+    gather_block<simd::V8>(g, p, x, count);
+  }
 }
 void lag_products_sse(const float* e, int w, int h, double* acc) {
   lag_products_v<simd::V4>(e, w, h, acc);
 }
 __attribute__((target("avx2"))) void lag_products_avx2(const float* e, int w, int h, double* acc) {
   lag_products_v<simd::V8>(e, w, h, acc);
-}
-void step_row_sse(const StepRow& r) {
-  step_row_v<simd::V4>(r);
-}
-__attribute__((target("avx2"))) void step_row_avx2(const StepRow& r) {
-  step_row_v<simd::V8>(r);
 }
 }  // namespace
 
@@ -336,10 +334,6 @@ void gather_row(bool avx2, const GatherRow& g) {
 
 void lag_products(bool avx2, const float* e, int w, int h, double acc[49]) {
   (avx2 ? lag_products_avx2 : lag_products_sse)(e, w, h, acc);
-}
-
-void step_row(bool avx2, const StepRow& r) {
-  (avx2 ? step_row_avx2 : step_row_sse)(r);
 }
 
 }  // namespace naneye::recon::scene::dense_simd

@@ -54,8 +54,8 @@ struct GatherRow {
 };
 void gather_row(bool avx2, const GatherRow& g);
 
-// One row of an earlier Gauss-Newton iteration's step (RectifiedMatcher::refine), in float, over
-// columns [lo, hi): from the window sums N, W, L, G, WW, GG, WG, WL, GL (s[0..8] at this row) the
+// One row of an earlier Gauss-Newton iteration's step (RectifiedMatcher::refine; dense_step.cpp), in
+// float, over columns [lo, hi): from the window sums N, W, L, G, WW, GG, WG, WL, GL (s[0..8] at this row) the
 // centred 2 x 2 system, its step nc / na clamped to half a pixel. Per pixel: no disparity (d NaN),
 // no data (m == 0) or fewer than 4 window pixels, or det <= 0: d = NaN, out = solved = 0; na <= 0
 // (anti-correlated): out = solved = 0; else out = d + step, solved = 1.
@@ -68,5 +68,57 @@ struct StepRow {
   int lo, hi;
 };
 void step_row(bool avx2, const StepRow& r);
+
+// One row of the last Gauss-Newton iteration's fit (RectifiedMatcher::refine), in double, over
+// columns [lo, hi) (dense_fit.cpp). From the window sums s[0..9] (N, W, L, G, WW, GG, WG, WL, GL, LL)
+// at this row: n = N, step = solved = 0; no disparity, no data, N < 4 or det <= 0: d = NaN and nothing
+// else written; else the fit's a, b, c, s2, z and centred sums, and where a > 0 the step c / a clamped
+// to half a pixel, solved = 1. The AVX2 build computes 4 pixels at once in the scalar loop's order.
+struct FitRow {
+  const float* s[10];
+  const float* m;  // the gather's mask channel
+  float* d;        // reference disparities (in; NaN where refused)
+  float *n, *step, *solved, *a, *b, *c, *s2, *z, *sww, *swg, *sgg;
+  int lo, hi;
+};
+void fit_row(bool avx2, const FitRow& r);
+
+// One row of window_detail()'s solve (RectifiedMatcher, dense_subpixel.cpp), in double over [lo, hi):
+// from the fit's sums s[0, 1, 3, 4, 5, 6] (N, W, G, WW, GG, WG), the detail's s[7] = sum WGq,
+// s[8] = sum GGq and sgq = sum Gq, out = (Sww ggq_c - Swg wgq_c) / det (0 where N < 4 or det <= 0).
+struct DetailRow {
+  const float* s[9];
+  const float* sgq;
+  float* out;
+  int lo, hi;
+};
+void detail_row(bool avx2, const DetailRow& r);
+
+// One row of the last iteration's update (RectifiedMatcher::refine) over [lo, hi): d = NaN where not
+// solved, else d += step + (move if both the detail q and move = q_win - q lie within 3 sigma =
+// 3 sqrt(s2 z) / a, else 0).
+struct UpdateRow {
+  const float *solved, *step, *q, *q_win, *s2, *z, *a;
+  float* d;
+  int lo, hi;
+};
+void update_row(bool avx2, const UpdateRow& r);
+
+// correlation()'s per-pixel steps (dense_fit.cpp), over [lo, hi) of the given planes:
+// residual: e = a W + b - c G - L where m > 0, d is finite and s2 <= lim, else 0;
+// centre: z = G - sum G / max(1, N) where m > 0, else 0; zz = z^2; zh = 0;
+// kappa: k = max(0, szh / szz) where szz > 0, else 1.
+struct ResidualRow {
+  const float *m, *w, *l, *g, *d, *s2, *a, *b, *c;
+  float* e;
+};
+void residual_row(bool avx2, const ResidualRow& r, double lim, std::size_t lo, std::size_t hi);
+void centre_row(bool avx2, const float* m, const float* g, const float* sg, const float* sn, float* z,
+                float* zz, float* zh, int lo, int hi);
+void kappa_row(bool avx2, const float* szz, const float* szh, float* kappa, int lo, int hi);
+
+// One row of the earlier iterations' window mean (RectifiedMatcher::refine) over [lo, hi), where d is
+// finite: next = sum / cnt (d where cnt <= 0), moved = next - d, d = next.
+void mean_row(bool avx2, const float* sum, const float* cnt, float* d, float* moved, int lo, int hi);
 
 }  // namespace naneye::recon::scene::dense_simd

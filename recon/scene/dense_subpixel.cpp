@@ -10,6 +10,8 @@
 // window. Var(c) = s^2 (A^-1)_cc with s^2 = SSR / (N - 3); delta = c / a, so sigma_d = sigma_c / a.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "dense_simd.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
@@ -22,6 +24,30 @@ constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
 // px; the residual autocorrelation's reach: the window radius (noise correlated by Keys' 4 taps and
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
+
+// f.template operator()<T>(i) on the spans' pixels: T four floats (an SSE2 vector: the x86-64
+// baseline) where four pixels of the row remain, else float. For element-wise steps written once for
+// both, so the lanes and the tails compute the same expressions: the plain loop's bits.
+using F4 = float __attribute__((vector_size(16)));
+template <class T>
+inline T get4(const float* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class T>
+inline void put4(float* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+template <class F>
+void each4(const Spans& sp, F&& f) {
+  for (int y = 0; y < sp.h; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * sp.w;
+    int x = sp.lo[y];
+    for (; x + 4 <= sp.hi[y]; x += 4) f.template operator()<F4>(row + x);
+    for (; x < sp.hi[y]; ++x) f.template operator()<float>(row + x);
+  }
+}
 
 }  // namespace
 
@@ -64,17 +90,43 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       }
   }
   mean_ = count > 0 ? sum / static_cast<double>(count) : 0.0;
+  // Both per-pixel masks below 4 or 16 pixels at a time (SSE2 vectors): as plain loops they cost
+  // ~3 M instructions a pair, the tap test's four branches per pixel most of it.
+  using VB4 = std::uint8_t __attribute__((vector_size(4)));
+  using VB16 = std::uint8_t __attribute__((vector_size(16)));
+  using VF = float __attribute__((vector_size(16)));
+  using VI = std::int32_t __attribute__((vector_size(16)));
   for (int y = 0; y < h_; ++y) {
     const float* sg = integer_.ptr<float>(y);
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w_; ++x) d_[static_cast<std::size_t>(y) * w_ + x] = vl[x] ? sg[x] : kNoMatch;
+    float* d = d_.data() + static_cast<std::size_t>(y) * w_;
+    int x = 0;
+    for (; x + 4 <= w_; x += 4) {
+      VB4 v;
+      VF g;
+      std::memcpy(&v, vl + x, sizeof v);
+      std::memcpy(&g, sg + x, sizeof g);
+      const VF out = __builtin_convertvector(v, VI) != 0 ? g : VF{} + kNoMatch;
+      std::memcpy(d + x, &out, sizeof out);
+    }
+    for (; x < w_; ++x) d[x] = vl[x] ? sg[x] : kNoMatch;
   }
   // Right pixels whose four cubic taps all lie inside the right's valid domain (gather's test).
   for (int y = 0; y < h_; ++y) {
     const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
     std::uint8_t* ok = taps_ok_.data() + static_cast<std::size_t>(y) * w_;
-    for (int x = 0; x < w_; ++x)
+    auto one = [&](int x) {
       ok[x] = x >= 1 && x + 2 < w_ && vr[x - 1] && vr[x] && vr[x + 1] && vr[x + 2] ? 1 : 0;
+    };
+    int x = 0;
+    for (; x < std::min(1, w_); ++x) one(x);
+    for (; x + 18 <= w_; x += 16) {  // taps x - 1 .. x + 17 inside the row
+      VB16 t[4];
+      for (int k = 0; k < 4; ++k) std::memcpy(&t[k], vr + x - 1 + k, sizeof t[k]);
+      const VB16 all = reinterpret_cast<VB16>((t[0] != 0) & (t[1] != 0) & (t[2] != 0) & (t[3] != 0)) & 1;
+      std::memcpy(ok + x, &all, sizeof all);
+    }
+    for (; x < w_; ++x) one(x);
   }
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
@@ -106,40 +158,27 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     } else {
       reference_detail();
       // The last fit in double: its gain, offset, residual and variance are read after the loop.
-      sp.each([&](std::size_t i) {
-        const float N = S[i];
-        n_[i] = N;
-        mstep[i] = 0;
-        msolved[i] = 0;
-        if (!std::isfinite(d_[i]) || chan_[i] == 0 || N < 4) {
-          d_[i] = kNoMatch;
-          return;
-        }
-        const double inv = 1.0 / N;
-        const double sw = S[1 * n + i], sl = S[2 * n + i], sgr = S[3 * n + i];
-        const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sgr * sgr * inv;
-        const double Swg = S[6 * n + i] - sw * sgr * inv, Swl = S[7 * n + i] - sw * sl * inv;
-        const double Sgl = S[8 * n + i] - sgr * sl * inv;
-        const double det = Sww * Sgg - Swg * Swg;
-        if (!(det > 0)) {
-          d_[i] = kNoMatch;
-          return;
-        }
-        const double a = (Sgg * Swl - Swg * Sgl) / det, c = (Swg * Swl - Sww * Sgl) / det;
-        const double Sll = S[9 * n + i] - sl * sl * inv;
-        a_[i] = static_cast<float>(a);
-        c_[i] = static_cast<float>(c);
-        b_[i] = static_cast<float>((sl - a * sw + c * sgr) * inv);
-        s2_[i] = static_cast<float>(std::max(0.0, Sll - a * Swl + c * Sgl) / std::max(1.0, N - 3.0));
-        z_[i] = static_cast<float>(Sww / det);
-        sww_[i] = static_cast<float>(Sww);
-        swg_[i] = static_cast<float>(Swg);
-        sgg_[i] = static_cast<float>(Sgg);
-        if (!(a > 0)) return;  // anti-correlated: validate() refuses it
-        // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
-        mstep[i] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
-        msolved[i] = 1;
-      });
+      dense_simd::FitRow r{};
+      for (int y = 0; y < h_; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y) * w_;
+        for (int k = 0; k < 10; ++k) r.s[k] = S + static_cast<std::size_t>(k) * n + row;
+        r.m = chan_.data() + row;
+        r.d = d_.data() + row;
+        r.n = n_.data() + row;
+        r.step = mstep + row;
+        r.solved = msolved + row;
+        r.a = a_.data() + row;
+        r.b = b_.data() + row;
+        r.c = c_.data() + row;
+        r.s2 = s2_.data() + row;
+        r.z = z_.data() + row;
+        r.sww = sww_.data() + row;
+        r.swg = swg_.data() + row;
+        r.sgg = sgg_.data() + row;
+        r.lo = span_lo_[static_cast<std::size_t>(y)];
+        r.hi = span_hi_[static_cast<std::size_t>(y)];
+        dense_simd::fit_row(avx2_, r);
+      }
     }
     // The window's shape is the reference field d_ (each pixel warped by its own reference
     // disparity: slanted surfaces keep their shape), its correction the window's common step. The
@@ -150,31 +189,35 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     if (last) {
       // The window's estimate at the final reference, its detail replaced by the window's view of it.
       const float* q_win = window_detail();
-      sp.each([&](std::size_t i) {
-        if (!(msolved[i] > 0)) {
-          d_[i] = kNoMatch;
-          return;
-        }
-        // Only where the detail is noise: a detail or a move beyond 3 sigma (white-noise sigma, no
-        // kappa) is the surface's own structure, a depth edge or a fold the smooth part cannot
-        // follow (ungated, Middlebury Aloe's bad-0.5 rose from 4.22 to 4.59 % with a window-sized
-        // smooth part, to 5.12 % with twice that; gated, 4.31 %).
-        const float move = q_win[i] - chan_[7 * n + i];
-        const float noise = 3.f * std::sqrt(s2_[i] * z_[i]) / a_[i];
-        const bool smooth = std::abs(chan_[7 * n + i]) <= noise && std::abs(move) <= noise;
-        d_[i] += mstep[i] + (smooth ? move : 0.f);
-      });
+      // Only where the detail is noise: a detail or a move beyond 3 sigma (white-noise sigma, no
+      // kappa) is the surface's own structure, a depth edge or a fold the smooth part cannot
+      // follow (ungated, Middlebury Aloe's bad-0.5 rose from 4.22 to 4.59 % with a window-sized
+      // smooth part, to 5.12 % with twice that; gated, 4.31 %).
+      dense_simd::UpdateRow u{};
+      for (int y = 0; y < h_; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y) * w_;
+        u.solved = msolved + row;
+        u.step = mstep + row;
+        u.q = chan_.data() + 7 * n + row;
+        u.q_win = q_win + row;
+        u.s2 = s2_.data() + row;
+        u.z = z_.data() + row;
+        u.a = a_.data() + row;
+        u.d = d_.data() + row;
+        u.lo = span_lo_[static_cast<std::size_t>(y)];
+        u.hi = span_hi_[static_cast<std::size_t>(y)];
+        dense_simd::update_row(avx2_, u);
+      }
       break;
     }
     dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
     dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
-    sp.each([&](std::size_t i) {
-      if (!std::isfinite(d_[i])) return;
-      const float cnt = S[5 * n + i];
-      const float next = cnt > 0 ? S[4 * n + i] / cnt : d_[i];
-      smooth_step_[i] = next - d_[i];
-      d_[i] = next;
-    });
+    for (int y = 0; y < h_; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * w_;
+      dense_simd::mean_row(avx2_, S + 4 * n + row, S + 5 * n + row, d_.data() + row,
+                           smooth_step_.data() + row, span_lo_[static_cast<std::size_t>(y)],
+                           span_hi_[static_cast<std::size_t>(y)]);
+    }
   }
   correlation(valid_left);
 }
@@ -203,14 +246,18 @@ void RectifiedMatcher::reference_detail() {
   float* bval = chan_.data() + 6 * n;
   float* bcnt = chan_.data() + 9 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  sp.each([&](std::size_t i) {
-    const bool ok = std::isfinite(d_[i]);
-    val[i] = ok ? d_[i] : 0.f;
-    cnt[i] = ok ? 1.f : 0.f;
+  const float* d = d_.data();
+  each4(sp, [&]<class T>(std::size_t i) {
+    const T di = get4<T>(d + i);
+    const auto ok = di - di == 0.f;  // finite
+    put4(val + i, ok ? di : T{});
+    put4(cnt + i, ok ? T{} + 1.f : T{});
   });
   dense_simd::box_sum(avx2_, val, bval, scratch_.data(), sp, 2 * s_.radius);
   dense_simd::box_sum(avx2_, cnt, bcnt, scratch_.data(), sp, 2 * s_.radius);
-  sp.each([&](std::size_t i) { val[i] = cnt[i] > 0 ? d_[i] - bval[i] / bcnt[i] : 0.f; });
+  each4(sp, [&]<class T>(std::size_t i) {
+    put4(val + i, get4<T>(cnt + i) > 0.f ? get4<T>(d + i) - get4<T>(bval + i) / get4<T>(bcnt + i) : T{});
+  });
 }
 
 const float* RectifiedMatcher::window_detail() {
@@ -221,11 +268,11 @@ const float* RectifiedMatcher::window_detail() {
   float* ggq = chan_.data() + 8 * n;
   float* gq = chan_.data() + 9 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  sp.each([&](std::size_t i) {
-    const float g = ch[3 * n + i];
-    gq[i] = g * q[i];
-    wgq[i] = ch[n + i] * gq[i];
-    ggq[i] = g * gq[i];
+  each4(sp, [&]<class T>(std::size_t i) {
+    const T g = get4<T>(ch + 3 * n + i), gqi = g * get4<T>(q + i);
+    put4(gq + i, gqi);
+    put4(wgq + i, get4<T>(ch + n + i) * gqi);
+    put4(ggq + i, g * gqi);
   });
   // The fit's own sums (0 N, 1 W, 3 G, 4 WW, 5 GG, 6 WG) are read here, 2 and 9 by validate()'s
   // window features: only 7 and 8 are free after the fit, and line_copy_ until correlation().
@@ -235,21 +282,16 @@ const float* RectifiedMatcher::window_detail() {
   dense_simd::box_sum(avx2_, ggq, S + 8 * n, scratch_.data(), sp, s_.radius);
   dense_simd::box_sum(avx2_, gq, sgq, scratch_.data(), sp, s_.radius);
   float* out = wgq;  // its sum is taken
-  sp.each([&](std::size_t i) {
-    const double N = S[i];
-    if (!(N >= 4)) {
-      out[i] = 0.f;
-      return;
-    }
-    const double inv = 1.0 / N;
-    const double sw = S[n + i], sg = S[3 * n + i];
-    const double Sww = S[4 * n + i] - sw * sw * inv, Sgg = S[5 * n + i] - sg * sg * inv;
-    const double Swg = S[6 * n + i] - sw * sg * inv;
-    const double det = Sww * Sgg - Swg * Swg;
-    const double wgq_c = S[7 * n + i] - sw * inv * sgq[i];
-    const double ggq_c = S[8 * n + i] - sg * inv * sgq[i];
-    out[i] = det > 0 ? static_cast<float>((Sww * ggq_c - Swg * wgq_c) / det) : 0.f;
-  });
+  dense_simd::DetailRow r{};
+  for (int y = 0; y < h_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    for (int k = 0; k < 9; ++k) r.s[k] = S + static_cast<std::size_t>(k) * n + row;
+    r.sgq = sgq + row;
+    r.out = out + row;
+    r.lo = span_lo_[static_cast<std::size_t>(y)];
+    r.hi = span_hi_[static_cast<std::size_t>(y)];
+    dense_simd::detail_row(avx2_, r);
+  }
   return out;
 }
 
@@ -266,12 +308,11 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   if (m > 0) {
     med = kth_smallest(line_copy_.data(), m, m / 2, select_hist_);
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
-    // noise: left out of the autocorrelation.
-    const bool use = ch[i] > 0 && std::isfinite(d_[i]) && s2_[i] <= 3 * med;
-    e[i] = use ? a_[i] * ch[n + i] + b_[i] - c_[i] * ch[3 * n + i] - ch[2 * n + i] : 0.f;
-  }
+  // Windows with a residual far above the median (occlusion, a wrong match) carry structure, not
+  // noise: left out of the autocorrelation.
+  const dense_simd::ResidualRow rr{ch,         ch + n,    ch + 2 * n, ch + 3 * n, d_.data(),
+                                   s2_.data(), a_.data(), b_.data(),  c_.data(),  e};
+  dense_simd::residual_row(avx2_, rr, 3 * med, 0, n);
   constexpr int kSide = 2 * kLag + 1;
   double acc[kSide][kSide];
   // Every other row and column: ~15 000 products per lag on a pair, the estimate's scatter ~0.01.
@@ -289,21 +330,25 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   float* zz = chan_.data() + 6 * n;
   float* zh = chan_.data() + 7 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
-  sp.each(
-      [&](std::size_t i) { z[i] = ch[i] > 0 ? ch[3 * n + i] - S[3 * n + i] / std::max(1.f, S[i]) : 0.f; });
+  for (int y = 0; y < h_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    dense_simd::centre_row(avx2_, ch + row, ch + 3 * n + row, S + 3 * n + row, S + row, z + row, zz + row,
+                           zh + row, span_lo_[static_cast<std::size_t>(y)],
+                           span_hi_[static_cast<std::size_t>(y)]);
+  }
   // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
   // over whole rows: plain multiply-adds the compiler vectorises.
-  sp.each([&](std::size_t i) {
-    zz[i] = z[i] * z[i];
-    zh[i] = 0;
-  });
   dense_simd::filter_lags(avx2_, z, zh, rho_.data(), kLag, sp);
-  sp.each([&](std::size_t i) { zh[i] *= z[i]; });
+  each4(sp, [&]<class T>(std::size_t i) { put4(zh + i, get4<T>(zh + i) * get4<T>(z + i)); });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
   dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, s_.radius);
   dense_simd::box_sum(avx2_, zh, szh, scratch_.data(), sp, s_.radius);
-  sp.each([&](std::size_t i) { kappa_px_[i] = szz[i] > 0 ? std::max(0.f, szh[i] / szz[i]) : 1.f; });
+  for (int y = 0; y < h_; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w_;
+    dense_simd::kappa_row(avx2_, szz + row, szh + row, kappa_px_.data() + row,
+                          span_lo_[static_cast<std::size_t>(y)], span_hi_[static_cast<std::size_t>(y)]);
+  }
   std::size_t k = 0;
   sp.each([&](std::size_t i) {
     if (std::isfinite(d_[i]) && ch[i] > 0) line_copy_[k++] = kappa_px_[i];

@@ -1,6 +1,7 @@
 // The semi-global matcher's path kernel (sgm_simd.hpp's aggregate_row), its vector builds: Eq. 13
 // of Hirschmueller 2008 along the five paths of one row, and S (Eq. 14). The scalar reference is
 // sgm_scalar.cpp's aggregate; every build gives its bits (SgmKernels.*).
+#include <algorithm>
 #include <cstddef>
 
 #include "sgm_scalar.hpp"
@@ -68,10 +69,9 @@ NANEYE_SGM_INLINE void aggregate_fixed(const PathRow& r) {
   V h[N];
   for (int k = 0; k < N; ++k) h[k] = V{};  // a path's first pixel: the zero start block
   int h_min = 0;
-  for (int x = r.lo; x < r.hi; ++x) {
+  auto forward = [&](int x, const Pred& q1, const Pred& q2, const Pred& q3) __attribute__((always_inline)) {
     const std::int16_t* c = r.cost + static_cast<std::size_t>(x) * D;
     std::int16_t* s = r.sum + static_cast<std::size_t>(x) * D;
-    const Pred q1 = above(r, 0, x - 1), q2 = above(r, 1, x), q3 = above(r, 2, x + 1);
     std::int16_t* o1 = r.cur[0] + static_cast<std::size_t>(x) * Ds;
     std::int16_t* o2 = r.cur[1] + static_cast<std::size_t>(x) * Ds;
     std::int16_t* o3 = r.cur[2] + static_cast<std::size_t>(x) * Ds;
@@ -101,7 +101,17 @@ NANEYE_SGM_INLINE void aggregate_fixed(const PathRow& r) {
     hmin4<B>(m0, m1, m2, m3, mins);
     h_min = mins[0];
     for (int k = 0; k < 3; ++k) r.cur_min[k][x] = static_cast<std::int16_t>(mins[1 + k]);
-  }
+  };
+  // Where all three predecessors lie inside the row above's span, above()'s range tests are known
+  // to pass (they were ~3 M instructions a pair): the row is done in three parts.
+  auto inner = [&](int k, int xp) __attribute__((always_inline)) {
+    return Pred{r.prev[k] + static_cast<std::size_t>(xp) * Ds, r.prev_min[k][xp]};
+  };
+  const int in0 = std::clamp(r.prev_lo + 1, r.lo, r.hi), in1 = std::clamp(r.prev_hi - 1, in0, r.hi);
+  int x = r.lo;
+  for (; x < in0; ++x) forward(x, above(r, 0, x - 1), above(r, 1, x), above(r, 2, x + 1));
+  for (; x < in1; ++x) forward(x, inner(0, x - 1), inner(1, x), inner(2, x + 1));
+  for (; x < r.hi; ++x) forward(x, above(r, 0, x - 1), above(r, 1, x), above(r, 2, x + 1));
   for (int k = 0; k < N; ++k) h[k] = V{};
   h_min = 0;
   for (int x = r.hi - 1; x >= r.lo; --x) {

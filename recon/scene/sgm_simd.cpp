@@ -5,6 +5,8 @@
 
 #include "sgm_scalar.hpp"
 
+#include <immintrin.h>
+
 #include <algorithm>
 
 #include "sgm_vec.hpp"
@@ -110,21 +112,21 @@ NANEYE_SGM_INLINE void wta_v(const std::int16_t* sum, int D, int dmin, int w, in
     const std::int16_t* s = sum + static_cast<std::size_t>(x) * D;
     std::int16_t* rc = rcost_rev + (w - 1 - x + dmin);
     std::int16_t* rd = rdisp_rev + (w - 1 - x + dmin);
-    V m = V{} + sgm_simd::kPad;
-    for (int d = 0; d < D; d += L) {
+    // Per lane its minimum and the first d holding it (strictly below: an equal later d does not
+    // replace it); the first d at the row's minimum is then the smallest of those indices among the
+    // lanes whose minimum it is. One pass over the block (a second one, for the index, cost more).
+    V m = V{} + sgm_simd::kPad, at = m, di = lane, dd = lane + static_cast<std::int16_t>(dmin);
+    for (int d = 0; d < D; d += L, di += static_cast<std::int16_t>(L), dd += static_cast<std::int16_t>(L)) {
       const V v = load<V>(s + d), c = load<V>(rc + d);
-      m = vmin(m, v);
+      const auto lower = v < m;
+      m = lower ? v : m;
+      at = lower ? di : at;
       const auto better = v < c;  // branch-free: which of the right pixels this left pixel improves
       store(rc + d, better ? v : c);
-      store(rd + d, better ? lane + static_cast<std::int16_t>(dmin + d) : load<V>(rd + d));
+      store(rd + d, better ? dd : load<V>(rd + d));
     }
-    // The first d at the minimum: the smallest index among the lanes that hold it (a second pass
-    // over the block, from L1, rather than a scalar scan of ~D / 2 steps).
     const V mv = V{} + static_cast<std::int16_t>(hmin<B>(m));
-    V first = V{} + sgm_simd::kPad;
-    for (int d = 0; d < D; d += L)
-      first = vmin(first, load<V>(s + d) == mv ? lane + static_cast<std::int16_t>(d) : first);
-    best[x] = static_cast<std::int16_t>(hmin<B>(first));
+    best[x] = static_cast<std::int16_t>(hmin<B>(m == mv ? at : V{} + sgm_simd::kPad));
   }
 }
 
@@ -140,10 +142,36 @@ void hamming_sse(const std::uint32_t* cl, const std::uint16_t* lo, const std::ui
                  int D, int x0, int x1, std::int16_t* H) {
   hamming_v<16>(cl, lo, hi, w, dmin, D, x0, x1, H);
 }
-__attribute__((target("avx2"))) void hamming_avx2(const std::uint32_t* cl, const std::uint16_t* lo,
-                                                  const std::uint16_t* hi, int w, int dmin, int D, int x0,
+// AVX2 has a byte shuffle: the population count by a 16-entry table of nibble counts (the low 16
+// bits' four nibbles and the high 8 bits' two, moved to the lane's two bytes), the bytes then added
+// in pairs. 18 instructions per 16 disparities where the halving sums took 29; the same counts.
+__attribute__((target("avx2"))) void hamming_avx2(const std::uint32_t* cl, const std::uint16_t* lo_rev,
+                                                  const std::uint16_t* hi_rev, int w, int dmin, int D, int x0,
                                                   int x1, std::int16_t* H) {
-  hamming_v<32>(cl, lo, hi, w, dmin, D, x0, x1, H);
+  const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2,
+                                         3, 1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i nib = _mm256_set1_epi16(0x0f0f), low = _mm256_set1_epi16(0x000f),
+                high = _mm256_set1_epi16(0x0f00);
+  const __m256i ones = _mm256_set1_epi8(1);
+  for (int x = x0; x < x1; ++x) {
+    const __m256i llo = _mm256_set1_epi16(static_cast<std::int16_t>(cl[x] & 0xffffu));
+    const __m256i lhi = _mm256_set1_epi16(static_cast<std::int16_t>(cl[x] >> 16));
+    const std::size_t j = static_cast<std::size_t>(w - 1 - x + dmin);
+    std::int16_t* o = H + static_cast<std::size_t>(x) * D;
+    for (int d = 0; d < D; d += 16) {
+      const __m256i a =
+          _mm256_xor_si256(llo, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(lo_rev + j + d)));
+      const __m256i b =
+          _mm256_xor_si256(lhi, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(hi_rev + j + d)));
+      const __m256i bn =
+          _mm256_or_si256(_mm256_and_si256(b, low), _mm256_and_si256(_mm256_slli_epi16(b, 4), high));
+      const __m256i n = _mm256_add_epi8(
+          _mm256_add_epi8(_mm256_shuffle_epi8(table, _mm256_and_si256(a, nib)),
+                          _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(a, 4), nib))),
+          _mm256_shuffle_epi8(table, bn));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(o + d), _mm256_maddubs_epi16(n, ones));
+    }
+  }
 }
 void hsum3_sse(const std::int16_t* H, int D, int h0, int h1, int x0, int x1, std::int16_t* out) {
   hsum3_v<16>(H, D, h0, h1, x0, x1, out);

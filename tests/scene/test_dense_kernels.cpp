@@ -110,6 +110,8 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
     d[x] = x % 11 == 5 ? NAN : disp(rng);
     // Infinite references fail the AVX2 build's range test on the floor, as isfinite does.
     if (x % 13 == 7) d[x] = x % 2 ? INFINITY : -INFINITY;
+    // Finite but beyond int's range once floored: both builds' conversions refuse them.
+    if (x % 19 == 2) d[x] = x % 2 ? 3e9f : -3e9f;
     valid[x] = x % 17 != 9;
   }
   for (int x = 0; x < w; ++x)
@@ -266,6 +268,14 @@ TEST(DenseKernels, KthSmallestIsNthElementsValue) {
     std::vector<float> a = v, b = v;
     std::nth_element(a.begin(), a.begin() + static_cast<long>(k), a.end());
     EXPECT_EQ(kth_smallest(b.data(), n, k, hist), a[k]) << n << " " << k;
+    // Two ranks from one count (level_medians: the median and the lower quantile), either order.
+    const std::size_t k2 = rng() % n;
+    std::vector<float> c = v, a2 = v;
+    std::nth_element(a2.begin(), a2.begin() + static_cast<long>(k2), a2.end());
+    float r1, r2;
+    kth_smallest_pair(c.data(), n, k, k2, hist, r1, r2);
+    EXPECT_EQ(r1, a[k]) << n << " " << k;
+    EXPECT_EQ(r2, a2[k2]) << n << " " << k2;
   }
 }
 
