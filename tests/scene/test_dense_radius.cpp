@@ -38,6 +38,8 @@ struct Run {
   Figures f;
   int radius = 0;
   recon::scene::DepthMap map;
+  int again_radius = 0;  // the adaptive matcher on the same pair once more: the carried radius
+  bool again_same = false;
 };
 
 // The same luminance through a fixed r = 3 matcher and through the adaptive one (the defaults).
@@ -53,6 +55,16 @@ std::pair<Run, Run> fixed_and_adaptive(const sim::TexturedPair& p) {
   b.reconstruct(sr.luma(), out.second.map);
   out.first.radius = a.matcher().radius_used();
   out.second.radius = b.matcher().radius_used();
+  // The steady state: the next pair starts at the radius chosen and, the scene unchanged, keeps it
+  // (and its result) without a second match.
+  recon::scene::DepthMap again;
+  b.reconstruct(sr.luma(), again);
+  out.second.again_radius = b.matcher().radius_used();
+  out.second.again_same = true;
+  for (std::size_t i = 0; i < again.z_mm.size(); ++i) {
+    const float u = again.z_mm[i], v = out.second.map.z_mm[i];
+    out.second.again_same = out.second.again_same && (u == v || (std::isnan(u) && std::isnan(v)));
+  }
   out.first.f = against_truth(out.first.map, p.depth);
   out.second.f = against_truth(out.second.map, p.depth);
   for (const Run* r : {&out.first, &out.second})
@@ -68,6 +80,8 @@ TEST(DenseRadius, RealSensorBlurChoosesALargerWindowAndCoversMore) {
   const auto [fixed, adaptive] = fixed_and_adaptive(p);
   EXPECT_EQ(fixed.radius, 3);
   EXPECT_GT(adaptive.radius, 3);
+  EXPECT_EQ(adaptive.again_radius, adaptive.radius);
+  EXPECT_TRUE(adaptive.again_same);
   // bench_scene --real-sensor, sphere: 74.0 % at r = 3, 80.4 % at 4, 82.3 % at 5.
   EXPECT_GE(adaptive.f.coverage(), fixed.f.coverage() + 0.03);
   EXPECT_LE(adaptive.f.bad5_share(), fixed.f.bad5_share() + 0.001);
@@ -76,6 +90,7 @@ TEST(DenseRadius, RealSensorBlurChoosesALargerWindowAndCoversMore) {
 TEST(DenseRadius, SharpRenderKeepsTheWindowAndItsResult) {
   const auto [fixed, adaptive] = fixed_and_adaptive(test::textured_pair("sphere", false));
   EXPECT_EQ(adaptive.radius, 3);
+  EXPECT_EQ(adaptive.again_radius, 3);
   ASSERT_EQ(fixed.map.z_mm.size(), adaptive.map.z_mm.size());
   for (std::size_t i = 0; i < fixed.map.z_mm.size(); ++i) {
     const float a = fixed.map.z_mm[i], b = adaptive.map.z_mm[i];
