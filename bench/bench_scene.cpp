@@ -7,12 +7,16 @@
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--bayer] [--refusals] [--residual-p P] [--max-sigma PX]
-//                           [--wide-radius R] [--dense-radius R] [--defocus SIGMA] [--real-sensor]
+//                           [--wide-radius R] [--dense-radius R] [--max-radius R] [--defocus SIGMA]
+//                           [--real-sensor]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates. --residual-p P,
 // --max-sigma PX: that test's setting (dense_match.hpp) for a what-if run. --wide-radius R: the
 // sparse path's wider LK window (sparse.hpp; 0: the narrow window only), also a what-if; --dense-radius
-// R: the dense sub-pixel window's (dense_match.hpp).
+// R: the dense sub-pixel window's (dense_match.hpp), fixed; --max-radius R: the largest window the
+// matcher may choose per pair (R = 3: the window fixed at 3, as before the choice). The dense table's
+// r column: the radius each pair was matched with, in render order (the matcher carries it from pair
+// to pair, and from scene to scene: one matcher for the run, as in the daemon).
 // --defocus SIGMA: the renders' defocus blur, px (sim/sensor.hpp; default 0.35, with diffraction
 // 0.41 px in all: ~3x sharper than a real NanEye's edges, 1.0-1.6 px, ../shared/notes/measurements.md).
 // --real-sensor: the renders through the real NanEye's measured figures (sim::SensorSettings::measured:
@@ -116,6 +120,7 @@ void opencv_path(const recon::StereoRig& rig, const recon::scene::StereoLuma& lu
 // Dense figures of a depth map on the left raw grid against the truth (NaN = none in both).
 struct DenseTally {
   std::vector<double> ms;
+  std::string radii;  // the dense matcher's window radius per pair, px
   long truth = 0, covered = 0, unseen = 0, valid = 0, bad5 = 0;
   double rel_sum = 0;
   void add(const cv::Mat& z, const cv::Mat& truth_z) {
@@ -246,7 +251,9 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
-    if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc) ds.matcher.radius = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
+      ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--defocus") && i + 1 < argc) sensor.defocus_sigma_px = std::atof(argv[++i]);
   }
   cv::setNumThreads(1);  // one core for both paths
@@ -290,6 +297,7 @@ int main(int argc, char** argv) {
       da.ms.push_back(1e3 * (thread_cpu_s() - t1));
       da.add(cv::Mat(depth.height, depth.width, CV_32FC1, depth.z_mm.data()), p.depth);
       add_counts(mc, dense.match_counts());
+      da.radii += (da.radii.empty() ? "" : " ") + std::to_string(dense.matcher().radius_used());
       cv_dense.run(ours.luma(), p.depth, db);
     }
     dense_rows.emplace_back(da, db);
@@ -322,11 +330,12 @@ int main(int argc, char** argv) {
     row(dense_rows[k].first);
     std::printf(" |");
     row(dense_rows[k].second);
-    std::printf("\n");
+    std::printf(" | r %s\n", dense_rows[k].first.radii.c_str());
   }
   std::printf(
       "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
-      "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%\n");
+      "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our window "
+      "radius per pair, px\n");
   if (refusals) print_refusals(refused);
   return 0;
 }

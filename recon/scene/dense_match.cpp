@@ -36,12 +36,17 @@ double effective_dof(double q, double median) {
 }
 
 RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings& s)
-    : s_(s), w_(width), h_(height) {
+    : s_(s), w_(width), h_(height), r_(s.radius) {
+  s_.max_radius = std::max(s_.radius, s_.max_radius);
   sgm_ = std::make_unique<Sgm>(w_, h_, sgm_settings(s_));
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   integer_.create(h_, w_, CV_32FC1);
   disp_.create(h_, w_, CV_32FC1);
   sigma_.create(h_, w_, CV_32FC1);
+  if (s_.max_radius > s_.radius) {
+    alt_.disp.create(h_, w_, CV_32FC1);
+    alt_.sigma.create(h_, w_, CV_32FC1);
+  }
   for (auto* v : {&d_, &a_, &b_, &c_, &s2_, &kappa_px_, &n_, &z_, &smooth_step_, &sww_, &swg_, &sgg_})
     v->assign(n, 0.f);
   chan_.assign(10 * n, 0.f);
@@ -65,8 +70,59 @@ void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
   update_spans(valid_left);
   integer_stage(left, right);
+  match_at(r_, left, right, valid_left, valid_right);
+  if (s_.max_radius > s_.radius) choose_radius(left, right, valid_left, valid_right);
+}
+
+void RectifiedMatcher::match_at(int r, const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                                const cv::Mat& valid_right) {
+  r_ = r;
   refine(left, right, valid_left, valid_right);
   validate(valid_left);
+}
+
+// The window's radius per pair (MatcherSettings::grow_share). The sigma bound's refusals are the fit's
+// own statement that the window holds too little texture against the noise: blur (the real NanEye's
+// 1.0 px) lowers the gradients and raises them, a larger window sums more gradient. But a larger
+// window also spans more depth structure (Aloe's edges: fewer valid pixels, more bad ones), so
+// the larger radius must prove itself on the pair: more valid pixels by min_gain. No ground truth:
+// the valid count is what the validity tests (shift, sigma, residual, left-right, occlusion) pass.
+void RectifiedMatcher::choose_radius(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                                     const cv::Mat& valid_right) {
+  if (wait_ > 0) {
+    --wait_;
+    return;
+  }
+  const double candidates = std::max(1, counts_.candidates);
+  int step = 0;
+  if (counts_.texture > s_.grow_share * candidates && r_ < s_.max_radius)
+    step = 1;
+  else if (r_ > s_.radius && counts_.texture + marginal_ < s_.shrink_share * candidates)
+    step = -1;  // one radius smaller would refuse few: the scene has sharpened
+  while (step != 0) {
+    const int from = r_;
+    swap_result(alt_);  // alt_: this radius's result
+    match_at(from + step, left, right, valid_left, valid_right);
+    const int larger = step > 0 ? counts_.valid : alt_.counts.valid;
+    const int smaller = step > 0 ? alt_.counts.valid : counts_.valid;
+    if ((larger > (1 + s_.min_gain) * smaller) != (step > 0)) {
+      swap_result(alt_);  // the trial lost: back to the result at `from`, no trial for a while
+      r_ = from;
+      wait_ = s_.retry_pairs;
+      return;
+    }
+    // Grown: on while the sigma bound still refuses too many; shrunk: one step a pair.
+    if (step < 0 || r_ >= s_.max_radius || counts_.texture <= s_.grow_share * candidates) return;
+  }
+}
+
+void RectifiedMatcher::swap_result(Result& r) {
+  cv::swap(disp_, r.disp);
+  cv::swap(sigma_, r.sigma);
+  std::swap(counts_, r.counts);
+  std::swap(residual_sigma_, r.residual_sigma);
+  std::swap(kappa_, r.kappa);
+  std::swap(marginal_, r.marginal);
 }
 
 void RectifiedMatcher::update_spans(const cv::Mat& valid_left) {
@@ -187,7 +243,12 @@ double RectifiedMatcher::expected_dof(std::size_t i) const {
 }
 
 void RectifiedMatcher::validate(const cv::Mat& valid_left) {
-  const int side = 2 * s_.radius + 1;
+  const int side = 2 * r_ + 1;
+  // The sigma this pixel would have one radius smaller, for the same texture: the sum of squared
+  // gradients grows with the window's area, so sigma ~ 1 / (2 r + 1) (validate counts the candidates
+  // that would cross the bound there, choose_radius predicts from them).
+  const double shrunk = static_cast<double>(side) / std::max(1, side - 2);
+  int marginal = 0;
   const float min_n = static_cast<float>(s_.min_window_share * side * side);
   // The residual variance a window like this one should have: the median over the windows of
   // similar mean level (shot noise grows with the level, and the light's 1/d^2 spreads levels over
@@ -230,6 +291,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
         ++c.texture;
         continue;
       }
+      marginal += sigma * shrunk > s_.max_sigma_px;
       if (std::abs(smooth_step_[i]) > std::max(sigma, 1e-3)) {
         ++c.converged;
         continue;
@@ -269,7 +331,9 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       }
     }
   }
+  c.radius = r_;
   counts_ = c;
+  marginal_ = marginal;
 }
 
 // (A^-1)_cc of the last fit, with the regressors' own noise taken out (errors in variables; Fuller,

@@ -23,7 +23,7 @@ using simd::store;
 // cache), then 2r+1 of its columns, in float. Direct sums rather than running ones: nothing drifts
 // along a row, and every inner loop is an array add over whole vectors. Each output's additions
 // come in the same order as in a plain scalar loop (rows top to bottom, then columns left to right).
-// R > 0: the radius known at compile time (the matcher's 3 and twice it), so both tap loops unroll
+// R > 0: the radius known at compile time (the matcher's 3 .. 5 and twice them), so both tap loops unroll
 // into one load-add per tap; with the radius a run-time count the loop control cost as much as the
 // adds (callgrind: ~12 instructions per pixel, 49 M per pair). R = 0: any radius r.
 template <class V, int R>
@@ -43,7 +43,7 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
     if (R > 0 && y1 - y0 == 2 * R) {
       for (; x + L <= c1; x += L) {
         V acc = load<V>(first + x);
-#pragma GCC unroll 16
+#pragma GCC unroll 24
         for (int k = 1; k <= 2 * R; ++k) acc += load<V>(first + static_cast<std::size_t>(k) * w + x);
         store(tmp + x, acc);
       }
@@ -79,7 +79,7 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
     // Inner columns: tmp[x - r .. x + r] all inside [c0, c1).
     for (x = i0; x + L <= i1; x += L) {
       V acc = load<V>(tmp + x - r);
-#pragma GCC unroll 16
+#pragma GCC unroll 24
       for (int k = 1 - r; k <= r; ++k) acc += load<V>(tmp + x + k);
       store(o + x, acc);
     }
@@ -102,12 +102,24 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
 
 template <class V>
 NANEYE_SIMD_INLINE void box_sum_any(const float* in, float* out, float* tmp, const Spans& sp, int r) {
-  if (r == 3)
-    box_sum_v<V, 3>(in, out, tmp, sp, r);
-  else if (r == 6)
-    box_sum_v<V, 6>(in, out, tmp, sp, r);
-  else
-    box_sum_v<V, 0>(in, out, tmp, sp, r);
+  // The radii the matcher chooses from (MatcherSettings::radius .. max_radius, 3 .. 5 by default)
+  // and twice them (reference_detail); any other through the general loop (the same sums' bits).
+  switch (r) {
+    case 3:
+      return box_sum_v<V, 3>(in, out, tmp, sp, r);
+    case 4:
+      return box_sum_v<V, 4>(in, out, tmp, sp, r);
+    case 5:
+      return box_sum_v<V, 5>(in, out, tmp, sp, r);
+    case 6:
+      return box_sum_v<V, 6>(in, out, tmp, sp, r);
+    case 8:
+      return box_sum_v<V, 8>(in, out, tmp, sp, r);
+    case 10:
+      return box_sum_v<V, 10>(in, out, tmp, sp, r);
+    default:
+      return box_sum_v<V, 0>(in, out, tmp, sp, r);
+  }
 }
 
 // One lag at a time over whole rows: out + rho_lag z, in the lags' row-major order for every pixel.

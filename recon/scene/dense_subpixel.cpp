@@ -71,7 +71,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   // The left's own energy (LL) enters only the last fit's residual and the window features.
   for (int k = 0; k < (last ? kChannels : kChannels - 1); ++k)
-    dense_simd::box_sum(avx2_, ch + k * n, sums_.data() + k * n, scratch_.data(), sp, s_.radius);
+    dense_simd::box_sum(avx2_, ch + k * n, sums_.data() + k * n, scratch_.data(), sp, r_);
 }
 
 void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
@@ -210,8 +210,8 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       }
       break;
     }
-    dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, s_.radius);
-    dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, s_.radius);
+    dense_simd::box_sum(avx2_, mstep, sums_.data() + 4 * n, scratch_.data(), sp, r_);
+    dense_simd::box_sum(avx2_, msolved, sums_.data() + 5 * n, scratch_.data(), sp, r_);
     for (int y = 0; y < h_; ++y) {
       const std::size_t row = static_cast<std::size_t>(y) * w_;
       dense_simd::mean_row(avx2_, S + 4 * n + row, S + 5 * n + row, d_.data() + row,
@@ -253,8 +253,8 @@ void RectifiedMatcher::reference_detail() {
     put4(val + i, ok ? di : T{});
     put4(cnt + i, ok ? T{} + 1.f : T{});
   });
-  dense_simd::box_sum(avx2_, val, bval, scratch_.data(), sp, 2 * s_.radius);
-  dense_simd::box_sum(avx2_, cnt, bcnt, scratch_.data(), sp, 2 * s_.radius);
+  dense_simd::box_sum(avx2_, val, bval, scratch_.data(), sp, 2 * r_);
+  dense_simd::box_sum(avx2_, cnt, bcnt, scratch_.data(), sp, 2 * r_);
   each4(sp, [&]<class T>(std::size_t i) {
     put4(val + i, get4<T>(cnt + i) > 0.f ? get4<T>(d + i) - get4<T>(bval + i) / get4<T>(bcnt + i) : T{});
   });
@@ -278,9 +278,9 @@ const float* RectifiedMatcher::window_detail() {
   // window features: only 7 and 8 are free after the fit, and line_copy_ until correlation().
   float* S = sums_.data();
   float* sgq = line_copy_.data();
-  dense_simd::box_sum(avx2_, wgq, S + 7 * n, scratch_.data(), sp, s_.radius);
-  dense_simd::box_sum(avx2_, ggq, S + 8 * n, scratch_.data(), sp, s_.radius);
-  dense_simd::box_sum(avx2_, gq, sgq, scratch_.data(), sp, s_.radius);
+  dense_simd::box_sum(avx2_, wgq, S + 7 * n, scratch_.data(), sp, r_);
+  dense_simd::box_sum(avx2_, ggq, S + 8 * n, scratch_.data(), sp, r_);
+  dense_simd::box_sum(avx2_, gq, sgq, scratch_.data(), sp, r_);
   float* out = wgq;  // its sum is taken
   dense_simd::DetailRow r{};
   for (int y = 0; y < h_; ++y) {
@@ -342,8 +342,8 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   each4(sp, [&]<class T>(std::size_t i) { put4(zh + i, get4<T>(zh + i) * get4<T>(z + i)); });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
-  dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, s_.radius);
-  dense_simd::box_sum(avx2_, zh, szh, scratch_.data(), sp, s_.radius);
+  dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, r_);
+  dense_simd::box_sum(avx2_, zh, szh, scratch_.data(), sp, r_);
   for (int y = 0; y < h_; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * w_;
     dense_simd::kappa_row(avx2_, szz + row, szh + row, kappa_px_.data() + row,

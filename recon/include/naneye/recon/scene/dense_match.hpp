@@ -41,8 +41,34 @@ struct MatcherSettings {
   // bench_scene and Aloe (docs/scene.md).
   int sgm_p1 = 2 * 9;
   int sgm_p2 = 8 * 9;
-  int radius = 3;      // px; sub-pixel window (2 r + 1)^2
-  int iterations = 4;  // Gauss-Newton steps (each pixel converges in 2-3 from the SGM's start)
+  // px; the sub-pixel window (2 r + 1)^2: the smallest the matcher uses and the first it tries. r = 3
+  // is best on sharp images (the simulator's presets, Middlebury Aloe: at r = 4 Aloe's coverage fell
+  // 42.4 -> 36.2 %); on the real NanEye's blur (1.0 px) a larger window matches more (docs/scene.md).
+  int radius = 3;
+  // px; the largest window the matcher may choose per pair (RectifiedMatcher::radius_used; below).
+  // max_radius == radius: the window fixed at radius, as before the choice existed.
+  int max_radius = 5;
+  // The choice, from the pair alone. When more than grow_share of the candidates fail the sigma bound
+  // (MatchCounts::texture: the fit's own statement that the window holds too little gradient for its
+  // noise), the pair is matched again one radius larger, and the larger window is kept only if it
+  // gives more than (1 + min_gain) times the valid pixels; on while the share stays above. The radius
+  // carries over to the next pair (no second match in the steady state); it shrinks by one when the
+  // sigmas predict that one radius smaller would refuse less than shrink_share (validate: sigma ~
+  // 1 / (2 r + 1)) and the smaller window's valid count is not beaten by min_gain. A trial that loses
+  // waits retry_pairs pairs before the next. Measured at r = 3, 2 renders per preset (bench_scene
+  // --refusals), the sigma bound refuses of the candidates: simulator mono 0.6-2.0 % (tube 9.9 %),
+  // Bayer 4.4-7.4 % (tube 22.6 %); Middlebury Aloe 6.3 %; the real NanEye's blur, mono 9.6-16.0 %
+  // (tube 21.7 %), Bayer 17.7-22.3 % (tube 32.5 %). 8 % lies between the sharp and the blurred
+  // (the sharp tube is tried: the valid count decides). Shrinking is tried below 7 %: a radius the
+  // smaller window would not have left (at 5 % a Bayer height field kept the r = 4 it inherited from
+  // the tube before it, 0.3 points less coverage); the gap to 8 % and the trial's own comparison keep
+  // a pair near the bound from alternating. min_gain 2 %: the valid count's change from r to r + 1
+  // on a blurred render is +9..66 % (r = 3 -> 4), ~0.5-3 % (4 -> 5); on Aloe it falls (r = 4: -15 %).
+  double grow_share = 0.08;
+  double shrink_share = 0.07;
+  double min_gain = 0.02;
+  int retry_pairs = 16;  // pairs (the NanEye's ~40 pairs a second: 0.4 s)
+  int iterations = 4;    // Gauss-Newton steps (each pixel converges in 2-3 from the SGM's start)
   // The integer stage is trusted to +-0.5 px: a match whose disparity sigma exceeds a third of
   // that could sit in the wrong basin undetected (3 sigma).
   double max_sigma_px = 0.5 / 3;
@@ -76,6 +102,7 @@ struct MatchCounts {
   int left_right = 0;  // the integer stage's left-right check refused it (counted before the tests below)
   int occluded = 0;    // a nearer surface claims the same right pixel
   int valid = 0;
+  int radius = 0;  // px; the sub-pixel window's radius this pair was matched with
 };
 
 // The residual test's null: a window's residual variance over the median of its kind is chi-square
@@ -106,9 +133,26 @@ class RectifiedMatcher {
   double residual_sigma() const { return residual_sigma_; }  // median window's, input units
   double noise_correlation() const { return kappa_; }        // median correlation factor
   const MatcherSettings& settings() const { return s_; }
+  // px; the window radius the last pair was matched with (settings().radius .. max_radius), and
+  // the one the next pair starts from.
+  int radius_used() const { return r_; }
 
  private:
   void integer_stage(const cv::Mat& left, const cv::Mat& right);
+  // refine() and validate() at radius r (r_ := r).
+  void match_at(int r, const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                const cv::Mat& valid_right);
+  // The per-pair choice of the window (MatcherSettings::grow_share; dense_radius.cpp).
+  void choose_radius(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
+                     const cv::Mat& valid_right);
+  // One pair's results, kept while another radius is tried (swapped, never copied or allocated).
+  struct Result {
+    cv::Mat disp, sigma;
+    MatchCounts counts;
+    double residual_sigma = 0, kappa = 1;
+    int marginal = 0;
+  };
+  void swap_result(Result& r);
   void refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
               const cv::Mat& valid_right);
   void validate(const cv::Mat& valid_left);
@@ -144,6 +188,10 @@ class RectifiedMatcher {
 
   MatcherSettings s_;
   int w_, h_;
+  int r_;             // px; the window radius in use (the settings' radius .. max_radius)
+  int wait_ = 0;      // pairs until the next trial of another radius (MatcherSettings::retry_pairs)
+  int marginal_ = 0;  // candidates that passed the sigma bound but would fail it at r_ - 1 (validate)
+  Result alt_;        // the other radius's results during a trial
   std::unique_ptr<Sgm> sgm_;
   cv::Mat integer_;
   cv::Mat disp_, sigma_;
