@@ -3,7 +3,10 @@
 // every noisy render: the spread of Z over the seeds (the noise's part of the error) against the
 // stated sigma, the noise-free render's error (the method's misfit: resampling, the window model)
 // against the same sigma, and the plain rms(err / sigma) the tests hold to 0.7-1.4.
-//   build/bench/bench_dense_sigma [--seeds K]
+//   build/bench/bench_dense_sigma [--seeds K] [--real-sensor] [--max-radius R]
+// --real-sensor: the real NanEye's measured noise, blur and fixed patterns (SensorSettings::measured),
+// where the matcher widens its window (the r column: the radius the last noisy render was matched with).
+// --max-radius R: the largest window the matcher may choose (R = 3: the fixed window).
 // An honest sigma gives rms(spread / sigma) ~ 1; the misfit is not noise and is not in the sigma.
 #include <cmath>
 #include <cstdio>
@@ -29,8 +32,9 @@ struct Case {
   double contrast_factor;  // times the preset's texture contrast
 };
 
-void run(const recon::StereoRig& rig, const Case& c, int seeds) {
-  sim::SensorSettings sensor;
+void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor,
+         const recon::scene::DenseSettings& ds) {
+  sim::SensorSettings sensor = real_sensor ? sim::SensorSettings::measured(c.bayer) : sim::SensorSettings{};
   sensor.bayer = c.bayer;
   sensor.white_dn = c.white_dn;
   sim::TexturedSceneSettings scene = *sim::textured_preset(c.preset);
@@ -38,10 +42,10 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds) {
   std::vector<double> s1, s2, sig2, e2;
   std::vector<int> count;
   recon::scene::SparseReconstructor luma(rig);
-  recon::scene::DenseReconstructor dense(rig);
+  recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap map;
   double misfit2 = 0;
-  int misfit_n = 0;
+  int misfit_n = 0, radius = 0;
   for (int k = 0; k <= seeds; ++k) {
     sim::SensorSettings s = sensor;
     s.noise = k < seeds;  // the last render without noise
@@ -50,6 +54,7 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds) {
     const sim::TexturedPair p = renderer.render(scene, rng);
     luma.load_luma(sim::raw_view(p.left, c.bayer), sim::raw_view(p.right, c.bayer));
     dense.reconstruct(luma.luma(), map);
+    if (k < seeds) radius = dense.matcher().radius_used();
     if (count.empty()) {
       const std::size_t n = static_cast<std::size_t>(map.width) * map.height;
       for (auto* v : {&s1, &s2, &sig2, &e2}) v->assign(n, 0.0);
@@ -87,7 +92,7 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds) {
     err += e2[i] / seeds;
     ++m;
   }
-  std::printf("%-18s %-5s %7d %8.3f %9.3f %8.3f\n", c.label, c.bayer ? "bayer" : "mono", m,
+  std::printf("%-18s %-5s %2d %7d %8.3f %9.3f %8.3f\n", c.label, c.bayer ? "bayer" : "mono", radius, m,
               std::sqrt(spread / std::max(1, m)), std::sqrt(misfit2 / std::max(1, misfit_n)),
               std::sqrt(err / std::max(1, m)));
 }
@@ -96,12 +101,18 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds) {
 
 int main(int argc, char** argv) {
   int seeds = 8;
-  for (int a = 1; a + 1 < argc; ++a)
-    if (std::strcmp(argv[a], "--seeds") == 0) seeds = std::max(2, std::atoi(argv[a + 1]));
+  bool real_sensor = false;
+  recon::scene::DenseSettings ds;
+  for (int a = 1; a < argc; ++a) {
+    if (a + 1 < argc && std::strcmp(argv[a], "--seeds") == 0) seeds = std::max(2, std::atoi(argv[a + 1]));
+    if (std::strcmp(argv[a], "--real-sensor") == 0) real_sensor = true;
+    if (a + 1 < argc && std::strcmp(argv[a], "--max-radius") == 0)
+      ds.matcher.max_radius = std::atoi(argv[a + 1]);
+  }
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
   std::printf("%d noise seeds per case; figures over the pixels valid in every noisy render\n", seeds);
-  std::printf("%-18s %-5s %7s %8s %9s %8s\n", "case", "", "pixels", "spread/s", "misfit/s", "err/s");
+  std::printf("%-18s %-5s %2s %7s %8s %9s %8s\n", "case", "", "r", "pixels", "spread/s", "misfit/s", "err/s");
   const Case cases[] = {
       {"plane", "plane", false, 760, 1},
       {"sphere", "sphere", false, 760, 1},
@@ -111,6 +122,6 @@ int main(int argc, char** argv) {
       {"plane", "plane", true, 760, 1},
       {"sphere", "sphere", true, 760, 1},
   };
-  for (const Case& c : cases) run(rig, c, seeds);
+  for (const Case& c : cases) run(rig, c, seeds, real_sensor, ds);
   return 0;
 }

@@ -7,13 +7,15 @@
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--bayer] [--refusals] [--residual-p P] [--max-sigma PX]
-//                           [--wide-radius R] [--dense-radius R] [--max-radius R] [--defocus SIGMA]
-//                           [--real-sensor]
+//       [--min-zncc Z] [--wide-radius R] [--dense-radius R] [--max-radius R] [--defocus SIGMA]
+//       [--real-sensor]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
-// validity test it fails), summed over the renders, in % of the candidates. --residual-p P,
-// --max-sigma PX: that test's setting (dense_match.hpp) for a what-if run. --wide-radius R: the
-// sparse path's wider LK window (sparse.hpp; 0: the narrow window only), also a what-if; --dense-radius
-// R: the dense sub-pixel window's (dense_match.hpp), fixed; --max-radius R: the largest window the
+// validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
+// features per pair by status. --residual-p P, --max-sigma PX: that dense test's setting
+// (dense_match.hpp) for a what-if run; --min-zncc Z: the sparse coarse search's acceptance
+// (sparse.hpp), a what-if too. --wide-radius R: the sparse path's wider LK window (sparse.hpp; 0: the
+// narrow window only), also a what-if; --dense-radius R: the dense sub-pixel window's
+// (dense_match.hpp), fixed; --max-radius R: the largest window the
 // matcher may choose per pair (R = 3: the window fixed at 3, as before the choice). The dense table's
 // r column: the radius each pair was matched with, in render order (the matcher carries it from pair
 // to pair, and from scene to scene: one matcher for the run, as in the daemon).
@@ -26,6 +28,7 @@
 #include <Eigen/Core>  // before opencv2/core/eigen.hpp
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -235,6 +238,23 @@ void print_refusals(const std::vector<recon::scene::MatchCounts>& rows) {
   std::printf("%% of the rectified candidates (left data), summed over the renders\n");
 }
 
+// The sparse path's features per pair by their status (sparse.hpp PointStatus), per scene.
+constexpr int kStatuses = static_cast<int>(recon::scene::PointStatus::imprecise) + 1;
+using StatusRow = std::array<long, kStatuses>;
+
+void print_sparse_refusals(const std::vector<StatusRow>& rows, int seeds) {
+  std::printf("\n%-10s |", "features");
+  for (int k = 0; k < kStatuses; ++k)
+    std::printf(" %9.9s", recon::scene::to_string(static_cast<recon::scene::PointStatus>(k)));
+  std::printf("\n");
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    std::printf("%-10s |", sim::textured_preset_names()[r].c_str());
+    for (long n : rows[r]) std::printf(" %9.1f", double(n) / seeds);
+    std::printf("\n");
+  }
+  std::printf("sparse features tried per pair, by status (matching stops at max_points valid)\n");
+}
+
 int main(int argc, char** argv) {
   int seeds = 3;
   bool bayer = false, refusals = false;
@@ -250,6 +270,7 @@ int main(int argc, char** argv) {
     // What-if: one validity test loosened, to see what the pixels it refuses would give.
     if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--min-zncc") && i + 1 < argc) ss.min_zncc = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
@@ -268,6 +289,7 @@ int main(int argc, char** argv) {
   OpenCvDense cv_dense(rig);
   std::vector<std::pair<DenseTally, DenseTally>> dense_rows;
   std::vector<recon::scene::MatchCounts> refused;
+  std::vector<StatusRow> statuses;
   std::printf("bench_scene: %d renders per scene, %s, blur sigma %.2f px, %s, paper-d3 rig, one thread\n",
               seeds, bayer ? "GRBG Bayer" : "mono", sensor.blur_sigma_px(),
               sensor.dsnu_dn > 0 ? "the real sensor's noise and fixed patterns" : "the simulator's sensor");
@@ -278,6 +300,7 @@ int main(int argc, char** argv) {
     Tally a, b;
     DenseTally da, db;
     recon::scene::MatchCounts mc;
+    StatusRow st{};
     for (int s = 0; s < seeds; ++s) {
       sim::TexturedSceneSettings scene = *sim::textured_preset(name);
       scene.texture.seed += static_cast<std::uint64_t>(100 * s);
@@ -288,8 +311,10 @@ int main(int argc, char** argv) {
       ours.reconstruct(lv, rv, res);
       a.ms.push_back(1e3 * (thread_cpu_s() - t0));
       ++a.pairs;
-      for (const auto& q : res.points)
+      for (const auto& q : res.points) {
+        ++st[static_cast<std::size_t>(q.status)];
         if (q.valid()) a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y());
+      }
       opencv_path(rig, ours.luma(), p.depth, b);
       // Dense on the luminance the sparse path made (the daemon shares it the same way).
       const double t1 = thread_cpu_s();
@@ -302,6 +327,7 @@ int main(int argc, char** argv) {
     }
     dense_rows.emplace_back(da, db);
     refused.push_back(mc);
+    statuses.push_back(st);
     auto row = [](Tally& t) {
       std::printf(" %7.2f %7.0f %9.0f %8.2f%% %6.2f%%", t.p50(), double(t.points) / t.pairs,
                   double(t.points - t.outliers) / t.pairs, 100.0 * t.outliers / std::max(1L, t.points),
@@ -336,6 +362,9 @@ int main(int argc, char** argv) {
       "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
       "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our window "
       "radius per pair, px\n");
-  if (refusals) print_refusals(refused);
+  if (refusals) {
+    print_refusals(refused);
+    print_sparse_refusals(statuses, seeds);
+  }
   return 0;
 }
