@@ -154,9 +154,12 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
       if (w % 2) p[w - 1] = (p[w - 1] - balance->offset[s0]) * inv[s0];
     }
   }
-  // 3x3 binomial [1 2 1; 2 4 2; 1 2 1] / 16 on the mosaic: at every site it sums R, G, B with
-  // weights 1/4, 1/2, 1/4 and it is symmetric about the pixel centre, so edges do not move. At the
-  // image border the mosaic is mirrored about the pixel (r - 1 -> r + 1 is the same Bayer site).
+  binomial_3x3(f, out, w, h, row_lo, row_hi);
+}
+
+void binomial_3x3(const float* f, float* out, int w, int h, int row_lo, int row_hi) {
+  // At the image border the image is mirrored about the pixel (r - 1 -> r + 1: on a mosaic, the same
+  // Bayer site).
   auto at = [&](int r, int c) {
     if (r < 0) r = 1;
     if (r >= h) r = h - 2;

@@ -267,6 +267,11 @@ void raw_to_luminance(const RawImageView& image, float* out, float* scratch,
                       float defect_threshold_dn = kDefectThresholdDn, int row_lo = 0, int row_hi = -1,
                       const CfaBalance* balance = nullptr, bool textured = false);
 
+// The 3x3 binomial [1 2 1; 2 4 2; 1 2 1] / 16 of a w x h image, rows [row_lo, row_hi) of `out`
+// (`f` and `out` apart). On a GRBG mosaic it sums R, G, B with weights 1/4, 1/2, 1/4 at every site;
+// on any image it is symmetric about the pixel centre, so edges do not move. Allocates nothing.
+void binomial_3x3(const float* f, float* out, int w, int h, int row_lo, int row_hi);
+
 // Orders a detected grid by one image-space convention so that two near-identical views number the
 // same physical corners alike: the column axis (row 0 -> col 0 .. cols-1) points to +x in the image
 // when it is closer to horizontal, else to +y. Only the 180-degree turn is free for rows != cols.
