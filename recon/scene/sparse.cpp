@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "naneye/base/enum_table.hpp"
+#include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 #include "round.hpp"
 
@@ -87,6 +88,16 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.left.assign(np, 0.f);
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
+  {
+    // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
+    const int side = 2 * s_.lk.radius + 1;
+    const double nu = side * side - 8, k = 2.0 / (9.0 * nu);
+    const double z = upper_normal_quantile(std::max(s_.final_noise_false_reject, 1e-12));
+    // 0: the test off (the ZNCC alone decides).
+    final_ssr_quantile_ = s_.final_noise_false_reject > 0 ? nu * std::pow(1.0 - k + z * std::sqrt(k), 3) : -1;
+  }
+  luma_.left_search.assign(np, 0.f);
+  luma_.right_search.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
   const int wide = std::max(s_.wide_radius, s_.lk.radius);
   usable_wide_[0] = usable_mask(rig_.left, layout, wide);
@@ -117,6 +128,11 @@ void SparseReconstructor::load_luma(const RawImageView& left, const RawImageView
   raw_to_luminance(right, luma_.right.data(), luma_.scratch.data(), kDefectThresholdDn, 0, -1, nullptr,
                    kTextured);
   luma_.bayer = left.layout == PixelLayout::bayer_grbg;
+  luma_.search_filtered = s_.search_binomial && !luma_.bayer;
+  if (luma_.search_filtered) {
+    binomial_3x3(luma_.left.data(), luma_.left_search.data(), luma_.width, luma_.height, 0, luma_.height);
+    binomial_3x3(luma_.right.data(), luma_.right_search.data(), luma_.width, luma_.height, 0, luma_.height);
+  }
 }
 
 void SparseReconstructor::reconstruct(const RawImageView& left, const RawImageView& right,
@@ -131,11 +147,12 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   out.valid_count = 0;
   const GrayView L = luma.left_view();
   out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data());
+  noise_sigma_dn_ = out.noise_sigma_dn;
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
-  window_inverse_norms(L, s_.search_radius, usable_search_[0].data(), inv_norm_[0].data(),
-                       norm_scratch_.data());
-  window_inverse_norms(luma.right_view(), s_.search_radius, usable_search_[1].data(), inv_norm_[1].data(),
-                       norm_scratch_.data());
+  window_inverse_norms(luma.left_search_view(), s_.search_radius, usable_search_[0].data(),
+                       inv_norm_[0].data(), norm_scratch_.data());
+  window_inverse_norms(luma.right_search_view(), s_.search_radius, usable_search_[1].data(),
+                       inv_norm_[1].data(), norm_scratch_.data());
   // Coarse to fine over the cell grid (SparseSettings::max_points): every 4th cell in both
   // directions, then every 2nd, then the three remaining quarter lattices, raster order within each.
   const int cell = s_.features.cell_px;
@@ -183,12 +200,13 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
 
 void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, ScenePoint& p, WideCandidate& wc) {
   const GrayView L = luma.left_view(), R = luma.right_view();
+  const GrayView Ls = luma.left_search_view(), Rs = luma.right_search_view();
   // The feature is a pixel centre inside the domain: its ray was undistorted once (constructor).
   const std::size_t fi = static_cast<std::size_t>(f.v) * luma.width + f.u;
   const Eigen::Vector2d xl(rays_[2 * fi], rays_[2 * fi + 1]);
   const double w_min = 1.0 / s_.z_max_mm, w_max = 1.0 / s_.z_min_mm;
   sample_epipolar_curve(rig_.right, R_lr_, T_lr_, xl, w_min, w_max, s_.search_step_px, curve_);
-  const CurveMatch m = match_along_curve(L, f.u, f.v, R, usable_search_[1].data(), curve_, s_.search_radius,
+  const CurveMatch m = match_along_curve(Ls, f.u, f.v, Rs, usable_search_[1].data(), curve_, s_.search_radius,
                                          inv_norm_[1].data());
   if (!m.found) {
     p.status = PointStatus::no_candidates;
@@ -211,7 +229,8 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
   const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, R, usable_[1].data(),
                                         m.px, A0, shape_.data(), lks);
-  if (!narrow.converged || narrow.zncc < s_.min_final_zncc) {
+  const bool noise_left = narrow.ssr_dn2 <= final_ssr_quantile_ * 2 * noise_sigma_dn_ * noise_sigma_dn_;
+  if (!narrow.converged || (narrow.zncc < s_.min_final_zncc && !noise_left)) {
     p.status = PointStatus::refinement_failed;
     p.zncc = narrow.converged ? narrow.zncc : p.zncc;
     return;
@@ -229,7 +248,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   }
   sample_epipolar_curve(rig_.left, R_rl_, T_rl_, rig_.right.undistort(Eigen::Vector2d(ru, rv)).normalized,
                         w_min, w_max, s_.search_step_px, back_curve_);
-  const CurveMatch back = match_along_curve(R, ru, rv, L, usable_search_[0].data(), back_curve_,
+  const CurveMatch back = match_along_curve(Rs, ru, rv, Ls, usable_search_[0].data(), back_curve_,
                                             s_.search_radius, inv_norm_[0].data());
   // The back search starts from the rounded right pixel: allow for that rounding.
   const Eigen::Vector2d rounding = Eigen::Vector2d(ru, rv) - lk.px;

@@ -28,7 +28,25 @@ struct SparseSettings {
   // Ambiguity: the best must leave (1 - best) <= this share of (1 - second best) (a texture that
   // repeats along the curve gives two near-equal peaks: refused instead of guessed).
   double max_ambiguity = 0.5;
-  double min_final_zncc = 0.9;  // after LK
+  // After LK a match is kept when its ZNCC reaches min_final_zncc, or else when its residual is the
+  // two images' noise: SSR <= q (N - 8) 2 sigma_n^2, q the upper final_noise_false_reject quantile of
+  // chi-square(N - 8) / (N - 8) (N the window's pixels, 8 the warp's and the normalisation's
+  // parameters, sigma_n the left image's measured noise: features.hpp). A fixed ZNCC asks for a
+  // signal-to-noise ratio (0.9: texture variance >= 9x the noise's) that a real NanEye's blurred
+  // low-contrast texture does not reach while its match is right; the residual test asks only that
+  // nothing but noise is left. A wrong match leaves the texture's variance in the residual. 0: off.
+  double min_final_zncc = 0.9;
+  double final_noise_false_reject = 1e-3;
+  // The coarse search (ZNCC along the epipolar curve, both ways) on a mono luminance through the 3x3
+  // binomial, the filter a Bayer luminance already has; detection, the LK refinement and its sigma
+  // stay on the unfiltered pixels (least squares on white noise: the filter cannot make them more
+  // precise, and its correlated noise would need the sandwich). Why: a real NanEye's edges are
+  // 1.0-1.6 px wide (../shared/notes/measurements.md), so its optics pass < 1 % of the contrast at
+  // 0.5 cycles/px (Gaussian MTF exp(-2 pi^2 sigma^2 f^2) at sigma 1.0) and ~29 % at 0.25, where the
+  // binomial keeps 0 and 50 %: it removes the noise of a band that holds no signal, and the noise
+  // variance falls to 0.14x. A mono render at the measured sensor (bench_scene --real-sensor,
+  // --refusals): the tube's coarse ZNCC fell below min_zncc on 164 of its ~390 features per pair.
+  bool search_binomial = true;
   // The wider LK window (docs/scene.md, "Sparse path" step 5), px: 13 x 13 against lk.radius's 9 x 9
   // (2.1x the pixels: ~0.7x the disparity sigma where the texture is even). Its match replaces the
   // narrow one only where the affine warp holds over it (sparse.cpp); 0 (or <= lk.radius): never.
@@ -94,10 +112,18 @@ struct SparseResult {
 // The luminance of both eyes and their usable masks; shared with the dense path.
 struct StereoLuma {
   std::vector<float> left, right, scratch;
+  // The coarse search's images (SparseSettings::search_binomial): the luminance through the 3x3
+  // binomial when `search_filtered`, else unused (the search reads the luminance itself).
+  std::vector<float> left_search, right_search;
   int width = 0, height = 0;
   bool bayer = false;  // filtered from a GRBG mosaic: neighbouring pixels share noise
+  bool search_filtered = false;
   GrayView left_view() const { return {left.data(), width, height}; }
   GrayView right_view() const { return {right.data(), width, height}; }
+  GrayView left_search_view() const { return {(search_filtered ? left_search : left).data(), width, height}; }
+  GrayView right_search_view() const {
+    return {(search_filtered ? right_search : right).data(), width, height};
+  }
 };
 
 class SparseReconstructor {
@@ -157,9 +183,12 @@ class SparseReconstructor {
   double wide_z_ = 0;                           // upper normal quantile of wide_false_reject
   double wide_chi1_ = 0;                        // chi-square(1) upper quantile of wide_false_reject
   double wide_kappa_[2] = {1, 1};               // noise_dof_factor: mono, Bayer
-  std::vector<WideCandidate> wide_;             // per feature tried
-  std::vector<int> cell_point_;                 // per feature cell: its point's index, or -1
-  std::vector<std::uint8_t> noise_mask_;        // left: 3x3 neighbourhood inside usable_search_[0]
+  double final_ssr_quantile_ =
+      0;  // the LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject)
+  double noise_sigma_dn_ = 0;             // this pair's (reconstruct), for match()
+  std::vector<WideCandidate> wide_;       // per feature tried
+  std::vector<int> cell_point_;           // per feature cell: its point's index, or -1
+  std::vector<std::uint8_t> noise_mask_;  // left: 3x3 neighbourhood inside usable_search_[0]
   StereoLuma luma_;
   FeatureDetector detector_;
   std::vector<Feature> features_;
