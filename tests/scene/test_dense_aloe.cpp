@@ -1,7 +1,5 @@
 // The rectified matcher (recon/scene/dense_match.hpp) on a real stereo pair with ground truth:
-// Middlebury's Aloe (Scharstein & Pal, CVPR 2007), as Debian's opencv-doc ships it, already rectified,
-// against cv::StereoSGBM over the same disparity band. aloeGT.png is the left view's disparity at
-// the images' full size (1282 x 1110), in pixels, 0 = unknown (ximgproc's readGT reads it so).
+// Middlebury's Aloe (aloe_data.hpp), against cv::StereoSGBM over the same disparity band.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,12 +9,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "aloe_data.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 
 namespace naneye {
 namespace {
 
-const std::filesystem::path kAloe = "/usr/share/doc/opencv-doc/examples/data";
+const std::filesystem::path kAloe = test::kAloeDir;
 
 struct Bad {
   int known = 0, given = 0, bad_given = 0;
@@ -51,22 +50,11 @@ struct Aloe {
 
 Aloe load_aloe() {
   Aloe a;
-  const cv::Mat L = cv::imread((kAloe / "aloeL.jpg").string(), cv::IMREAD_GRAYSCALE);
-  const cv::Mat R = cv::imread((kAloe / "aloeR.jpg").string(), cv::IMREAD_GRAYSCALE);
-  const cv::Mat G = cv::imread((kAloe / "aloeGT.png").string(), cv::IMREAD_GRAYSCALE);
-  if (L.empty() || R.empty() || G.empty()) return a;
-  constexpr int kDown = 4;
-  cv::resize(L, a.l, cv::Size(), 1.0 / kDown, 1.0 / kDown, cv::INTER_AREA);
-  cv::resize(R, a.r, cv::Size(), 1.0 / kDown, 1.0 / kDown, cv::INTER_AREA);
-  a.g.create(a.l.rows, a.l.cols, CV_32FC1);
-  for (int y = 0; y < a.g.rows; ++y)
-    for (int x = 0; x < a.g.cols; ++x) {
-      // The block's centre pixel (unknown stays unknown; no averaging across depth edges).
-      const int gy = std::min(G.rows - 1, y * kDown + kDown / 2),
-                gx = std::min(G.cols - 1, x * kDown + kDown / 2);
-      const int v = G.at<std::uint8_t>(gy, gx);
-      a.g.at<float>(y, x) = v > 0 ? static_cast<float>(v) / kDown : 0.f;
-    }
+  const test::AloeQuarter q = test::load_aloe_quarter();
+  if (q.l.empty()) return a;
+  a.l = q.l;
+  a.r = q.r;
+  a.g = q.gt;
   double gmax = 0;
   cv::minMaxLoc(a.g, nullptr, &gmax);
   a.band = (static_cast<int>(std::ceil(gmax)) + 2 + 15) / 16 * 16;

@@ -1,5 +1,5 @@
 // The sparse path (recon/scene/sparse.hpp) on a real stereo pair with ground truth: Middlebury's
-// Aloe (Scharstein & Pal, CVPR 2007) from Debian's opencv-doc, already rectified. Ours runs through
+// Aloe (aloe_data.hpp) at a quarter size, a 250 x 250 crop. Ours runs through
 // a pinhole rig (no distortion, R = I, T = (-1 mm, 0, 0), f = 200 px: disparity = 200 / Z), so its
 // epipolar curves are the image rows and its matches' disparities compare with the truth directly.
 // Beside it, in the same run, the OpenCV path a user would glue (goodFeaturesToTrack +
@@ -15,16 +15,17 @@
 #include <opencv2/video/tracking.hpp>
 #include <vector>
 
+#include "aloe_data.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 
 namespace naneye {
 namespace {
 
-const std::filesystem::path kAloe = "/usr/share/doc/opencv-doc/examples/data";
-constexpr int kSide = 250;           // px; the NanEye's frame, which the sparse path is built for
-constexpr double kFocal = 200;       // px; the pinhole rig's (any value: disparity = kFocal * 1 mm / Z)
-constexpr int kDown = 4;             // Aloe at a quarter size (320 x 277): disparities 4-64 px
-constexpr int kCropX = 320 - kSide;  // the right part of the view: its matches lie inside the right crop
+const std::filesystem::path kAloe = test::kAloeDir;
+constexpr int kSide = 250;      // px; the NanEye's frame, which the sparse path is built for
+constexpr double kFocal = 200;  // px; the pinhole rig's (any value: disparity = kFocal * 1 mm / Z)
+// px; the right part of the quarter-size view (320 px wide): its matches lie inside the right crop.
+constexpr int kCropX = 320 - kSide;
 
 struct AloeCrop {
   cv::Mat l8, r8, gt;  // 8-bit views and the left view's disparity (px, 0 = unknown)
@@ -33,24 +34,12 @@ struct AloeCrop {
 
 AloeCrop load_crop() {
   AloeCrop a;
-  const cv::Mat L = cv::imread((kAloe / "aloeL.jpg").string(), cv::IMREAD_GRAYSCALE);
-  const cv::Mat R = cv::imread((kAloe / "aloeR.jpg").string(), cv::IMREAD_GRAYSCALE);
-  const cv::Mat G = cv::imread((kAloe / "aloeGT.png").string(), cv::IMREAD_GRAYSCALE);
-  if (L.empty() || R.empty() || G.empty()) return a;
-  cv::Mat l, r;
-  cv::resize(L, l, cv::Size(), 1.0 / kDown, 1.0 / kDown, cv::INTER_AREA);
-  cv::resize(R, r, cv::Size(), 1.0 / kDown, 1.0 / kDown, cv::INTER_AREA);
+  const test::AloeQuarter q = test::load_aloe_quarter();
+  if (q.l.empty()) return a;
   const cv::Rect roi(kCropX, 0, kSide, kSide);
-  a.l8 = l(roi).clone();
-  a.r8 = r(roi).clone();
-  a.gt.create(kSide, kSide, CV_32FC1);
-  for (int y = 0; y < kSide; ++y)
-    for (int x = 0; x < kSide; ++x) {
-      // The block's centre pixel (unknown stays unknown; no averaging across depth edges).
-      const int v = G.at<std::uint8_t>(std::min(G.rows - 1, y * kDown + kDown / 2),
-                                       std::min(G.cols - 1, (x + kCropX) * kDown + kDown / 2));
-      a.gt.at<float>(y, x) = v > 0 ? static_cast<float>(v) / kDown : 0.f;
-    }
+  a.l8 = q.l(roi).clone();
+  a.r8 = q.r(roi).clone();
+  a.gt = q.gt(roi).clone();
   // 8 bits to the sensor's 10 (x 4): the path's thresholds are in DN of a 10-bit frame.
   for (const auto& [src, dst] : {std::pair{&a.l8, &a.l16}, std::pair{&a.r8, &a.r16}}) {
     dst->resize(static_cast<std::size_t>(kSide) * kSide);
