@@ -3,9 +3,10 @@
 // every noisy render: the spread of Z over the seeds (the noise's part of the error) against the
 // stated sigma, the noise-free render's error (the method's misfit: resampling, the window model)
 // against the same sigma, and the plain rms(err / sigma) the tests hold to 0.7-1.4.
-//   build/bench/bench_dense_sigma [--seeds K] [--real-sensor] [--max-radius R]
+//   build/bench/bench_dense_sigma [--seeds K] [--real-sensor] [--no-fpn] [--max-radius R]
 // --real-sensor: the real NanEye's measured noise, blur and fixed patterns (SensorSettings::measured),
 // where the matcher widens its window (the r column: the radius the last noisy render was matched with).
+// --no-fpn: without the fixed pattern (column FPN, DSNU, PRNU), to tell its share of the misfit.
 // --max-radius R: the largest window the matcher may choose (R = 3: the fixed window).
 // An honest sigma gives rms(spread / sigma) ~ 1; the misfit is not noise and is not in the sigma.
 #include <cmath>
@@ -32,9 +33,10 @@ struct Case {
   double contrast_factor;  // times the preset's texture contrast
 };
 
-void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor,
+void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor, bool no_fpn,
          const recon::scene::DenseSettings& ds) {
   sim::SensorSettings sensor = real_sensor ? sim::SensorSettings::measured(c.bayer) : sim::SensorSettings{};
+  if (no_fpn) sensor.column_fpn_dn = sensor.dsnu_dn = sensor.prnu = 0;
   sensor.bayer = c.bayer;
   sensor.white_dn = c.white_dn;
   sim::TexturedSceneSettings scene = *sim::textured_preset(c.preset);
@@ -101,11 +103,12 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
 
 int main(int argc, char** argv) {
   int seeds = 8;
-  bool real_sensor = false;
+  bool real_sensor = false, no_fpn = false;
   recon::scene::DenseSettings ds;
   for (int a = 1; a < argc; ++a) {
     if (a + 1 < argc && std::strcmp(argv[a], "--seeds") == 0) seeds = std::max(2, std::atoi(argv[a + 1]));
     if (std::strcmp(argv[a], "--real-sensor") == 0) real_sensor = true;
+    if (std::strcmp(argv[a], "--no-fpn") == 0) no_fpn = true;
     if (a + 1 < argc && std::strcmp(argv[a], "--max-radius") == 0)
       ds.matcher.max_radius = std::atoi(argv[a + 1]);
   }
@@ -122,6 +125,6 @@ int main(int argc, char** argv) {
       {"plane", "plane", true, 760, 1},
       {"sphere", "sphere", true, 760, 1},
   };
-  for (const Case& c : cases) run(rig, c, seeds, real_sensor, ds);
+  for (const Case& c : cases) run(rig, c, seeds, real_sensor, no_fpn, ds);
   return 0;
 }
