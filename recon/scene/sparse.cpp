@@ -88,13 +88,13 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.left.assign(np, 0.f);
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
-  {
+  final_ssr_quantile_ = -1;  // final_noise_false_reject 0: the ZNCC alone decides
+  if (s_.final_noise_false_reject > 0) {
     // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
     const int side = 2 * s_.lk.radius + 1;
     const double nu = side * side - 8, k = 2.0 / (9.0 * nu);
-    const double z = upper_normal_quantile(std::max(s_.final_noise_false_reject, 1e-12));
-    // 0: the test off (the ZNCC alone decides).
-    final_ssr_quantile_ = s_.final_noise_false_reject > 0 ? nu * std::pow(1.0 - k + z * std::sqrt(k), 3) : -1;
+    const double z = upper_normal_quantile(s_.final_noise_false_reject);
+    final_ssr_quantile_ = nu * std::pow(1.0 - k + z * std::sqrt(k), 3);
   }
   luma_.left_search.assign(np, 0.f);
   luma_.right_search.assign(np, 0.f);
@@ -147,7 +147,6 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   out.valid_count = 0;
   const GrayView L = luma.left_view();
   out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data());
-  noise_sigma_dn_ = out.noise_sigma_dn;
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
   window_inverse_norms(luma.left_search_view(), s_.search_radius, usable_search_[0].data(),
                        inv_norm_[0].data(), norm_scratch_.data());
@@ -175,7 +174,7 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
     p.left_px = Eigen::Vector2d(f.u, f.v);
     p.right_px.setConstant(std::numeric_limits<double>::quiet_NaN());
     wide_.emplace_back();
-    match(luma, f, p, wide_.back());
+    match(luma, f, out.noise_sigma_dn, p, wide_.back());
     // Counted as one of max_points if either window's depth is precise enough (choose_wide may
     // still refuse the wider one: the final count follows it).
     const WideCandidate& wc = wide_.back();
@@ -198,7 +197,8 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   for (std::size_t k = 0; k < tried; ++k) out.points[k].id = ids[k];
 }
 
-void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, ScenePoint& p, WideCandidate& wc) {
+void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double noise_sigma_dn,
+                                ScenePoint& p, WideCandidate& wc) {
   const GrayView L = luma.left_view(), R = luma.right_view();
   const GrayView Ls = luma.left_search_view(), Rs = luma.right_search_view();
   // The feature is a pixel centre inside the domain: its ray was undistorted once (constructor).
@@ -229,7 +229,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, SceneP
   if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
   const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, R, usable_[1].data(),
                                         m.px, A0, shape_.data(), lks);
-  const bool noise_left = narrow.ssr_dn2 <= final_ssr_quantile_ * 2 * noise_sigma_dn_ * noise_sigma_dn_;
+  const bool noise_left = narrow.ssr_dn2 <= final_ssr_quantile_ * 2 * noise_sigma_dn * noise_sigma_dn;
   if (!narrow.converged || (narrow.zncc < s_.min_final_zncc && !noise_left)) {
     p.status = PointStatus::refinement_failed;
     p.zncc = narrow.converged ? narrow.zncc : p.zncc;

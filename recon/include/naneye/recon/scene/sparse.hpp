@@ -152,7 +152,9 @@ class SparseReconstructor {
     Eigen::Vector3d X{0, 0, 0};
     double depth_sigma_mm = 0, zncc = 0;
   };
-  void match(const StereoLuma& luma, const Feature& f, ScenePoint& p, WideCandidate& wc);
+  // noise_sigma_dn: the left image's (SparseResult::noise_sigma_dn), for the final residual test.
+  void match(const StereoLuma& luma, const Feature& f, double noise_sigma_dn, ScenePoint& p,
+             WideCandidate& wc);
   bool triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,
                          const Eigen::Matrix2d& cov_px, Eigen::Vector3d& X, double& depth_sigma_mm) const;
   // SparseSettings::max_depth_sigma_rel.
@@ -183,9 +185,8 @@ class SparseReconstructor {
   double wide_z_ = 0;                           // upper normal quantile of wide_false_reject
   double wide_chi1_ = 0;                        // chi-square(1) upper quantile of wide_false_reject
   double wide_kappa_[2] = {1, 1};               // noise_dof_factor: mono, Bayer
-  double final_ssr_quantile_ =
-      0;  // the LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject)
-  double noise_sigma_dn_ = 0;             // this pair's (reconstruct), for match()
+  // The LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject; < 0: off).
+  double final_ssr_quantile_ = 0;
   std::vector<WideCandidate> wide_;       // per feature tried
   std::vector<int> cell_point_;           // per feature cell: its point's index, or -1
   std::vector<std::uint8_t> noise_mask_;  // left: 3x3 neighbourhood inside usable_search_[0]
