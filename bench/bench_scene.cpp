@@ -6,21 +6,20 @@
 //           (raw_to_luminance, min-max stretched to 8 bits for OpenCV).
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
-//   build/bench/bench_scene [--seeds N] [--bayer] [--refusals] [--residual-p P] [--max-sigma PX]
-//       [--min-zncc Z] [--min-final-zncc Z] [--raw-search] [--wide-radius R] [--dense-radius R] [--max-radius
-//       R] [--defocus SIGMA]
-//       [--real-sensor]
+//   build/bench/bench_scene [--seeds N] [--bayer] [--real-sensor] [--defocus SIGMA] [--refusals]
+//       [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z] [--raw-search]
+//       [--wide-radius R] [--dense-radius R] [--max-radius R]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
-// features per pair by status. --residual-p P, --max-sigma PX: that dense test's setting
-// (dense_match.hpp) for a what-if run; --min-zncc Z, --min-final-zncc Z: the sparse coarse
-// search's and the LK match's acceptance (sparse.hpp), what-ifs too; --raw-search: that search on the
-// unfiltered mono luminance (SparseSettings::search_binomial off). --wide-radius R: the sparse path's wider
-// LK window (sparse.hpp; 0: the narrow window only), also a what-if; --dense-radius R: the dense sub-pixel
-// window's (dense_match.hpp), fixed; --max-radius R: the largest window the matcher may choose per pair (R =
-// 3: the window fixed at 3, as before the choice). The dense table's r column: the radius each pair was
-// matched with, in render order (the matcher carries it from pair to pair, and from scene to scene: one
-// matcher for the run, as in the daemon).
+// features per pair by status. What-ifs, one setting changed: --residual-p P, --max-sigma PX, the
+// dense validity tests' (dense_match.hpp); --min-zncc Z, --min-final-zncc Z, the sparse coarse
+// search's and LK match's acceptance (sparse.hpp); --raw-search, that search on the unfiltered mono
+// luminance (SparseSettings::search_binomial off); --wide-radius R, the sparse path's wider LK
+// window (0: the narrow window only). --dense-radius R: the dense sub-pixel window, fixed;
+// --max-radius R: the largest window the matcher may choose per pair (R = 3: fixed at 3, as before
+// the choice). The dense table's r column: the radius each pair was matched with, in render order
+// (the matcher carries it from pair to pair, and from scene to scene: one matcher for the run, as
+// in the daemon).
 // --defocus SIGMA: the renders' defocus blur, px (sim/sensor.hpp; default 0.35, with diffraction
 // 0.41 px in all: ~3x sharper than a real NanEye's edges, 1.0-1.6 px, ../shared/notes/measurements.md).
 // --real-sensor: the renders through the real NanEye's measured figures (sim::SensorSettings::measured:

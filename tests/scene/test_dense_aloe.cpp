@@ -15,8 +15,6 @@
 namespace naneye {
 namespace {
 
-const std::filesystem::path kAloe = test::kAloeDir;
-
 struct Bad {
   int known = 0, given = 0, bad_given = 0;
   double all() const { return static_cast<double>(bad_given + (known - given)) / std::max(1, known); }
@@ -64,7 +62,7 @@ Aloe load_aloe() {
 }
 
 TEST(DenseAloe, MatcherNoWorseThanSgbm) {
-  if (!std::filesystem::exists(kAloe / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
+  if (!std::filesystem::exists(test::kAloeDir / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
   const Aloe a = load_aloe();
   ASSERT_FALSE(a.l.empty() || a.r.empty() || a.g.empty());
   const cv::Mat &l = a.l, &r = a.r, &lf = a.lf, &rf = a.rf, &g = a.g;
@@ -118,7 +116,7 @@ TEST(DenseAloe, MatcherNoWorseThanSgbm) {
 // fewer valid pixels (coverage 42.4 -> 36.2 %, docs/scene.md), so a trial forced on every pair
 // (grow_share 0) must lose and leave r = 3's result.
 TEST(DenseAloe, LargerWindowTriedLosesOnItsValidCount) {
-  if (!std::filesystem::exists(kAloe / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
+  if (!std::filesystem::exists(test::kAloeDir / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
   const Aloe a = load_aloe();
   ASSERT_FALSE(a.l.empty());
   const cv::Mat valid(a.l.rows, a.l.cols, CV_8UC1, cv::Scalar(1));
@@ -143,13 +141,11 @@ TEST(DenseAloe, LargerWindowTriedLosesOnItsValidCount) {
 // The matcher works only on the rows' spans of left data and keeps its planes zero outside them
 // (dense_match.hpp): one reused on another mask must give what a fresh one gives.
 TEST(DenseAloe, MatcherReusedOnAnotherMaskGivesAFreshOnesResult) {
-  if (!std::filesystem::exists(kAloe / "aloeL.jpg")) GTEST_SKIP() << "opencv-doc is not installed";
-  cv::Mat l, r, lf, rf;
-  cv::resize(cv::imread((kAloe / "aloeL.jpg").string(), cv::IMREAD_GRAYSCALE), l, cv::Size(), 0.25, 0.25,
-             cv::INTER_AREA);
-  cv::resize(cv::imread((kAloe / "aloeR.jpg").string(), cv::IMREAD_GRAYSCALE), r, cv::Size(), 0.25, 0.25,
-             cv::INTER_AREA);
+  if (!std::filesystem::exists(test::kAloeDir / "aloeL.jpg")) GTEST_SKIP() << "opencv-doc is not installed";
+  const test::AloeQuarter q = test::load_aloe_quarter();
+  const cv::Mat &l = q.l, &r = q.r;
   ASSERT_FALSE(l.empty() || r.empty());
+  cv::Mat lf, rf;
   l.convertTo(lf, CV_32F);
   r.convertTo(rf, CV_32F);
   const cv::Mat all(l.rows, l.cols, CV_8UC1, cv::Scalar(1));

@@ -98,10 +98,7 @@ TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
   int outliers[2] = {0, 0}, valid[2] = {0, 0}, flagged = 0, inliers = 0;
   double z2 = 0;
   for (int k = 0; k < 3; ++k) {  // bench_scene's three renders
-    sim::TexturedSceneSettings scene = *sim::textured_preset("plane-far");
-    scene.texture.seed += static_cast<std::uint64_t>(100 * k);
-    sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
-    const sim::TexturedPair p = renderer.render(scene, rng);
+    const sim::TexturedPair p = test::bench_render(renderer, "plane-far", k);
     for (int flag = 0; flag < 2; ++flag) {
       recon::scene::SparseSettings s;
       if (!flag) s.max_depth_sigma_rel = std::numeric_limits<double>::infinity();
@@ -156,10 +153,7 @@ TEST(SparseRealSensor, FaintTubeKeepsItsPointsAndTheirSigmas) {
   int valid[2] = {0, 0}, outliers[2] = {0, 0}, unseen = 0, inliers = 0;
   double z2 = 0;
   for (int k = 0; k < 2; ++k) {
-    sim::TexturedSceneSettings scene = *sim::textured_preset("tube");
-    scene.texture.seed += static_cast<std::uint64_t>(100 * k);
-    sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
-    const sim::TexturedPair p = renderer.render(scene, rng);
+    const sim::TexturedPair p = test::bench_render(renderer, "tube", k);
     for (int now = 0; now < 2; ++now) {
       recon::scene::SparseSettings s;
       if (!now) {

@@ -21,7 +21,6 @@
 namespace naneye {
 namespace {
 
-const std::filesystem::path kAloe = test::kAloeDir;
 constexpr int kSide = 250;      // px; the NanEye's frame, which the sparse path is built for
 constexpr double kFocal = 200;  // px; the pinhole rig's (any value: disparity = kFocal * 1 mm / Z)
 // px; the right part of the quarter-size view (320 px wide): its matches lie inside the right crop.
@@ -112,7 +111,7 @@ Tally opencv(const AloeCrop& a) {
 }
 
 TEST(SparseAloe, MatchesARealPhotographAndBeatsTheOpenCvPath) {
-  if (!std::filesystem::exists(kAloe / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
+  if (!std::filesystem::exists(test::kAloeDir / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
   const AloeCrop a = load_crop();
   ASSERT_FALSE(a.l16.empty());
   double gmin = 1e9, gmax = 0;
