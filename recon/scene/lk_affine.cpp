@@ -1,7 +1,6 @@
 // Inverse-compositional affine Lucas-Kanade (lk_affine.hpp).
 #include "naneye/recon/scene/lk_affine.hpp"
 
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
@@ -9,6 +8,7 @@
 
 #include "lk_sample.hpp"
 #include "round.hpp"
+#include "spd_factor.hpp"
 
 namespace naneye::recon::scene {
 namespace {
@@ -34,6 +34,15 @@ Eigen::Matrix<double, D, D> kernel_outer(const std::array<float, 9>& b,
   return out;
 }
 constexpr int kMaxN = 15 * 15;
+
+// Rows 4 and 5 of the inverse of a factored symmetric 6 x 6 (its columns 4 and 5, transposed):
+// the translation's part of a solve.
+Eigen::Matrix<double, 2, 6> translation_rows(const SpdFactor<6>& f) {
+  Eigen::Matrix<double, 2, 6> p;
+  p.row(0) = f.solve(Eigen::Matrix<double, 6, 1>::Unit(4)).transpose();
+  p.row(1) = f.solve(Eigen::Matrix<double, 6, 1>::Unit(5)).transpose();
+  return p;
+}
 
 // Variance of a central-difference gradient, (x[+1] - x[-1]) / 2, of noise filtered by the 3 x 3
 // kernel b, per unit of the filtered noise's own variance: 1/2 for white noise.
@@ -143,8 +152,8 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   };
   const Eigen::Matrix<double, 6, 6> En = noise_part(moment_matrix(ring)),
                                     En_in = noise_part(moment_matrix(in));
-  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
-  if (ldlt.info() != Eigen::Success) return out;
+  SpdFactor<6> h_factor;
+  if (!h_factor.factor(H)) return out;
   // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
   // float rounding of t) and sum_k t_k^2 (1 up to it).
   Eigen::Matrix<double, 6, 1> sd_sum = Eigen::Matrix<double, 6, 1>::Zero(), sd_t = sd_sum;
@@ -200,7 +209,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   };
   for (int it = 0; it < s.max_iterations; ++it) {
     if (!sample()) return out;
-    const Eigen::Matrix<double, 6, 1> dp = ldlt.solve(grad);
+    const Eigen::Matrix<double, 6, 1> dp = h_factor.solve(grad);
     Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
     D(0, 0) += dp(0);
     D(0, 1) = dp(1);
@@ -251,12 +260,11 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   // residual's (both eyes' noise is in it); its gradients' the kernel's share of that.
   const double grad_noise = 0.5 * s2 * gradient_noise_ratio(b);
   const Eigen::Matrix<double, 6, 6> Hs = H - grad_noise * En;
-  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> lds(Hs);
+  SpdFactor<6> lds;
   // A template whose gradients are mostly its noise fixes no shift: no match.
-  if (lds.info() != Eigen::Success || !lds.isPositive() || !(lds.vectorD().minCoeff() > 0)) return LkResult{};
+  if (!lds.factor(Hs)) return LkResult{};
   // Only the translation's rows of Hs^-1 (symmetric: the solve against the last two unit vectors).
-  const Eigen::Matrix<double, 2, 6> Pw =
-      lds.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
+  const Eigen::Matrix<double, 2, 6> Pw = translation_rows(lds);
   // (b * SD) over the window grown by one pixel; white: B = H.
   const Eigen::Matrix<double, 6, 6> B = white ? H : kernel_outer(b, sd, side);
   const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * Pw * B * Pw.transpose();
@@ -266,11 +274,9 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     // inner fit's over its own pixels. Their difference is sum_k g_k e_k, whose covariance is the
     // same sandwich over g (exact for correlated noise, where the wide fit is not the efficient one
     // and Hausman's Sigma_inner - Sigma_wide does not hold).
-    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> lin(Hin - grad_noise * En_in);
-    if (lin.info() != Eigen::Success || !lin.isPositive() || !(lin.vectorD().minCoeff() > 0))
-      return LkResult{};
-    const Eigen::Matrix<double, 2, 6> Pin =
-        lin.solve(Eigen::Matrix<double, 6, 6>::Identity().rightCols<2>()).transpose();
+    SpdFactor<6> lin;
+    if (!lin.factor(Hin - grad_noise * En_in)) return LkResult{};
+    const Eigen::Matrix<double, 2, 6> Pin = translation_rows(lin);
     Eigen::Matrix2d G;
     if (white) {
       // sum_k g_k g_k^T with g_k = (Pin [k inner] - Pw) sd_k, from the sums H and Hin.
