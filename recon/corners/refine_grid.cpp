@@ -39,10 +39,8 @@ double CornerDetector::residual_bound(const SaddleFit& fit, double radius, doubl
   double nu = (fit.weight > 0 ? fit.weight : side * side) - (fit.harmonic ? 13.0 : 9.0);
   if (bayer_) nu /= kBayerNoiseCorrelation;
   nu = std::max(nu, 4.0);
-  // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
-  const double t = 1.0 - 2.0 / (9.0 * nu) + z_reject_ * std::sqrt(2.0 / (9.0 * nu));
   const double m = misfit * fit.contrast;
-  return var_n * t * t * t + m * m;
+  return var_n * chi2_upper_ratio(nu, z_reject_) + m * m;
 }
 
 double CornerDetector::position_se(const SaddleFit& fit) const {

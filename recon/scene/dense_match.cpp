@@ -296,12 +296,10 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
         ++c.converged;
         continue;
       }
-      // Chi-square upper quantile over the window's effective degrees of freedom (Wilson-Hilferty
-      // cube approximation; Johnson, Kotz, Balakrishnan 1994, Eq. 18.24).
+      // Chi-square upper quantile over the window's effective degrees of freedom.
       const double nu = std::max(
           1.0, std::min((n_[i] - 3.0) / std::max(1.0, static_cast<double>(kappa_px_[i])), expected_dof(i)));
-      const double t = 1 - 2 / (9 * nu) + zq * std::sqrt(2 / (9 * nu));
-      if (s2_[i] > expected_residual(i) * t * t * t) {
+      if (s2_[i] > expected_residual(i) * chi2_upper_ratio(nu, zq)) {
         ++c.residual;
         continue;
       }

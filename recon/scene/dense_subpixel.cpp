@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "../corners/simd.hpp"
 #include "dense_simd.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "select.hpp"
@@ -28,17 +29,9 @@ constexpr int kLag = 3;
 // f.template operator()<T>(i) on the spans' pixels: T four floats (an SSE2 vector: the x86-64
 // baseline) where four pixels of the row remain, else float. For element-wise steps written once for
 // both, so the lanes and the tails compute the same expressions: the plain loop's bits.
-using F4 = float __attribute__((vector_size(16)));
-template <class T>
-inline T get4(const float* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-template <class T>
-inline void put4(float* p, T v) {
-  std::memcpy(p, &v, sizeof v);
-}
+using F4 = simd::V4;
+using simd::load;
+using simd::store;
 template <class F>
 void each4(const Spans& sp, F&& f) {
   for (int y = 0; y < sp.h; ++y) {
@@ -94,8 +87,8 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
   // ~3 M instructions a pair, the tap test's four branches per pixel most of it.
   using VB4 = std::uint8_t __attribute__((vector_size(4)));
   using VB16 = std::uint8_t __attribute__((vector_size(16)));
-  using VF = float __attribute__((vector_size(16)));
-  using VI = std::int32_t __attribute__((vector_size(16)));
+  using VF = simd::V4;
+  using VI = simd::VI4;
   for (int y = 0; y < h_; ++y) {
     const float* sg = integer_.ptr<float>(y);
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
@@ -103,11 +96,9 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     int x = 0;
     for (; x + 4 <= w_; x += 4) {
       VB4 v;
-      VF g;
       std::memcpy(&v, vl + x, sizeof v);
-      std::memcpy(&g, sg + x, sizeof g);
-      const VF out = __builtin_convertvector(v, VI) != 0 ? g : VF{} + kNoMatch;
-      std::memcpy(d + x, &out, sizeof out);
+      const VF g = load<VF>(sg + x);
+      store(d + x, __builtin_convertvector(v, VI) != 0 ? g : VF{} + kNoMatch);
     }
     for (; x < w_; ++x) d[x] = vl[x] ? sg[x] : kNoMatch;
   }
@@ -248,15 +239,15 @@ void RectifiedMatcher::reference_detail() {
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   const float* d = d_.data();
   each4(sp, [&]<class T>(std::size_t i) {
-    const T di = get4<T>(d + i);
+    const T di = load<T>(d + i);
     const auto ok = di - di == 0.f;  // finite
-    put4(val + i, ok ? di : T{});
-    put4(cnt + i, ok ? T{} + 1.f : T{});
+    store(val + i, ok ? di : T{});
+    store(cnt + i, ok ? T{} + 1.f : T{});
   });
   dense_simd::box_sum(avx2_, val, bval, scratch_.data(), sp, 2 * r_);
   dense_simd::box_sum(avx2_, cnt, bcnt, scratch_.data(), sp, 2 * r_);
   each4(sp, [&]<class T>(std::size_t i) {
-    put4(val + i, get4<T>(cnt + i) > 0.f ? get4<T>(d + i) - get4<T>(bval + i) / get4<T>(bcnt + i) : T{});
+    store(val + i, load<T>(cnt + i) > 0.f ? load<T>(d + i) - load<T>(bval + i) / load<T>(bcnt + i) : T{});
   });
 }
 
@@ -269,10 +260,10 @@ const float* RectifiedMatcher::window_detail() {
   float* gq = chan_.data() + 9 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   each4(sp, [&]<class T>(std::size_t i) {
-    const T g = get4<T>(ch + 3 * n + i), gqi = g * get4<T>(q + i);
-    put4(gq + i, gqi);
-    put4(wgq + i, get4<T>(ch + n + i) * gqi);
-    put4(ggq + i, g * gqi);
+    const T g = load<T>(ch + 3 * n + i), gqi = g * load<T>(q + i);
+    store(gq + i, gqi);
+    store(wgq + i, load<T>(ch + n + i) * gqi);
+    store(ggq + i, g * gqi);
   });
   // The fit's own sums (0 N, 1 W, 3 G, 4 WW, 5 GG, 6 WG) are read here, 2 and 9 by validate()'s
   // window features: only 7 and 8 are free after the fit, and line_copy_ until correlation().
@@ -339,7 +330,7 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   // zh = z (rho * z), the correlation a 2D filter of z (zero outside the image), one lag at a time
   // over whole rows: plain multiply-adds the compiler vectorises.
   dense_simd::filter_lags(avx2_, z, zh, rho_.data(), kLag, sp);
-  each4(sp, [&]<class T>(std::size_t i) { put4(zh + i, get4<T>(zh + i) * get4<T>(z + i)); });
+  each4(sp, [&]<class T>(std::size_t i) { store(zh + i, load<T>(zh + i) * load<T>(z + i)); });
   float* szz = sums_.data() + 6 * n;
   float* szh = sums_.data() + 7 * n;
   dense_simd::box_sum(avx2_, zz, szz, scratch_.data(), sp, r_);

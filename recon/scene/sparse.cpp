@@ -90,11 +90,9 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.scratch.assign(np, 0.f);
   final_ssr_quantile_ = -1;  // final_noise_false_reject 0: the ZNCC alone decides
   if (s_.final_noise_false_reject > 0) {
-    // Wilson-Hilferty: chi2_nu / nu at the upper quantile ~ (1 - 2/(9 nu) + z sqrt(2/(9 nu)))^3.
     const int side = 2 * s_.lk.radius + 1;
-    const double nu = side * side - 8, k = 2.0 / (9.0 * nu);
-    const double z = upper_normal_quantile(s_.final_noise_false_reject);
-    final_ssr_quantile_ = nu * std::pow(1.0 - k + z * std::sqrt(k), 3);
+    const double nu = side * side - 8;
+    final_ssr_quantile_ = nu * chi2_upper_ratio(nu, upper_normal_quantile(s_.final_noise_false_reject));
   }
   luma_.left_search.assign(np, 0.f);
   luma_.right_search.assign(np, 0.f);

@@ -136,8 +136,7 @@ void SparseReconstructor::choose_wide(SparseResult& out) {
         sum += wide_[static_cast<std::size_t>(j)].hausman;
         ++count;
       }
-    const double nu = count, c = 2 / (9 * nu);
-    const double bound = nu * std::pow(1 - c + wide_z_ * std::sqrt(c), 3);
+    const double bound = count * chi2_upper_ratio(count, wide_z_);
     if (sum > bound) continue;
     p.right_px = wc.right_px;
     p.X = wc.X;

@@ -14,6 +14,7 @@
 // squares line of the site's values against the mean of its G neighbours (Gb against its diagonal
 // Gr neighbours first), so any gains and black level give the same luminance as a mono sensor.
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 namespace naneye::recon {
@@ -38,6 +39,14 @@ struct CfaBalance {
 
 // The standard normal quantile z with P(Z > z) = p (bisection on erfc; for settings, not per frame).
 double upper_normal_quantile(double p);
+
+// chi2_nu / nu at the upper quantile whose normal deviate is z (upper_normal_quantile), by Wilson
+// and Hilferty's cube approximation (Johnson, Kotz, Balakrishnan 1994, Eq. 18.24):
+// (1 - c + z sqrt(c))^3, c = 2 / (9 nu). Inline: the dense validity test takes it per pixel.
+inline double chi2_upper_ratio(double nu, double z) {
+  const double c = 2.0 / (9.0 * nu), t = 1.0 - c + z * std::sqrt(c);
+  return t * t * t;
+}
 
 // 10-bit full scale (1023) less the quantum of 8-bit data scaled by 4 (255 x 4 = 1020): a value at
 // or above it may be clipped, and says only that the light was at least that. The one clip level of
