@@ -9,20 +9,11 @@
 #include <cstdio>
 
 #include "naneye/recon/scene/sparse.hpp"
+#include "naneye/sim/render.hpp"
 #include "scene_fixture.hpp"
 
 namespace naneye {
 namespace {
-
-recon::RawImageView raw_view(const cv::Mat& m, bool bayer) {
-  recon::RawImageView v;
-  v.data = m.ptr<std::uint16_t>();
-  v.width = m.cols;
-  v.height = m.rows;
-  v.stride = static_cast<int>(m.step1());
-  v.layout = bayer ? recon::PixelLayout::bayer_grbg : recon::PixelLayout::mono;
-  return v;
-}
 
 struct Figure {
   double truth = 0, immerkaer = 0;
@@ -45,11 +36,11 @@ class Figures {
     with_.render_frames(*sim::textured_preset(preset), a, l1, r1);
     without_.render_frames(*sim::textured_preset(preset), b, l2, r2);
     const auto& mask = sparse_.usable(0);
-    sparse_.load_luma(raw_view(l1, bayer_), raw_view(r1, bayer_));
+    sparse_.load_luma(sim::raw_view(l1, bayer_), sim::raw_view(r1, bayer_));
     const std::vector<float> left = sparse_.luma().left;
     Figure f;
     f.immerkaer = recon::scene::estimate_noise_sigma(sparse_.luma().left_view(), mask.data());
-    sparse_.load_luma(raw_view(l2, bayer_), raw_view(r2, bayer_));
+    sparse_.load_luma(sim::raw_view(l2, bayer_), sim::raw_view(r2, bayer_));
     double ss = 0;
     long n = 0;
     for (std::size_t i = 0; i < left.size(); ++i)
