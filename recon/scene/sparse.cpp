@@ -15,19 +15,42 @@ namespace naneye::recon::scene {
 namespace {
 
 // Pixels whose ray exists (inside the fold) and that carry image data (RawImageView's ignored
-// padding column and edge rows excluded), eroded so that a window of `radius` fits.
-std::vector<std::uint8_t> usable_mask(const CameraModel& cam, const RawImageView& layout, int radius) {
+// padding column and edge rows excluded); `rays` (optional, 2 per pixel) gets their normalized rays.
+// One undistortion per pixel for all the masks below (it iterates: at 640 x 480 six passes took
+// ~10 s of the constructor).
+std::vector<std::uint8_t> domain_mask(const CameraModel& cam, const RawImageView& layout, double* rays) {
   const int w = cam.width(), h = cam.height();
-  std::vector<std::uint8_t> base(static_cast<std::size_t>(w) * h, 0), out(base.size(), 0);
+  std::vector<std::uint8_t> base(static_cast<std::size_t>(w) * h, 0);
   for (int r = layout.ignore_edge_rows; r < h - layout.ignore_edge_rows; ++r)
-    for (int c = 0; c < w - layout.ignore_last_cols; ++c)
-      base[static_cast<std::size_t>(r) * w + c] = cam.undistort(Eigen::Vector2d(c, r)).ok() ? 1 : 0;
-  for (int r = radius; r < h - radius; ++r)
+    for (int c = 0; c < w - layout.ignore_last_cols; ++c) {
+      const Undistorted u = cam.undistort(Eigen::Vector2d(c, r));
+      if (!u.ok()) continue;
+      const std::size_t i = static_cast<std::size_t>(r) * w + c;
+      base[i] = 1;
+      if (rays) {
+        rays[2 * i] = u.normalized.x();
+        rays[2 * i + 1] = u.normalized.y();
+      }
+    }
+  return base;
+}
+
+// `base` eroded so that a (2 radius + 1)^2 window around each pixel left fits in it: the square's
+// erosion as a row pass then a column pass.
+std::vector<std::uint8_t> eroded(const std::vector<std::uint8_t>& base, int w, int h, int radius) {
+  std::vector<std::uint8_t> rows(base.size(), 0), out(base.size(), 0);
+  for (int r = 0; r < h; ++r)
     for (int c = radius; c < w - radius; ++c) {
       bool ok = true;
+      for (int dc = -radius; dc <= radius && ok; ++dc)
+        ok = base[static_cast<std::size_t>(r) * w + c + dc] != 0;
+      rows[static_cast<std::size_t>(r) * w + c] = ok ? 1 : 0;
+    }
+  for (int r = radius; r < h - radius; ++r)
+    for (int c = 0; c < w; ++c) {
+      bool ok = true;
       for (int dr = -radius; dr <= radius && ok; ++dr)
-        for (int dc = -radius; dc <= radius && ok; ++dc)
-          ok = base[static_cast<std::size_t>(r + dr) * w + c + dc] != 0;
+        ok = rows[static_cast<std::size_t>(r + dr) * w + c] != 0;
       out[static_cast<std::size_t>(r) * w + c] = ok ? 1 : 0;
     }
   return out;
@@ -75,14 +98,19 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   R_rl_ = rig_.R.transpose();
   T_rl_ = -R_rl_ * rig_.T;
   const RawImageView layout;
-  usable_[0] = usable_mask(rig_.left, layout, s_.lk.radius + 1);
-  usable_[1] = usable_mask(rig_.right, layout, s_.lk.radius + 1);
-  usable_search_[0] = usable_mask(rig_.left, layout, s_.search_radius);
-  usable_search_[1] = usable_mask(rig_.right, layout, s_.search_radius);
+  const std::size_t np = static_cast<std::size_t>(rig_.left.width()) * rig_.left.height();
+  rays_.assign(2 * np, 0.0);  // never read outside the domain: features' windows lie inside it
+  const std::vector<std::uint8_t> domain[2] = {domain_mask(rig_.left, layout, rays_.data()),
+                                               domain_mask(rig_.right, layout, nullptr)};
+  const int w[2] = {rig_.left.width(), rig_.right.width()}, h[2] = {rig_.left.height(), rig_.right.height()};
+  const auto usable_mask = [&](int eye, int radius) { return eroded(domain[eye], w[eye], h[eye], radius); };
+  usable_[0] = usable_mask(0, s_.lk.radius + 1);
+  usable_[1] = usable_mask(1, s_.lk.radius + 1);
+  usable_search_[0] = usable_mask(0, s_.search_radius);
+  usable_search_[1] = usable_mask(1, s_.search_radius);
   // The noise estimate's 3x3 mask inside the coarse window's domain (a square erosion by r then by 1
   // is one by r + 1).
-  noise_mask_ = usable_mask(rig_.left, layout, s_.search_radius + 1);
-  const std::size_t np = static_cast<std::size_t>(rig_.left.width()) * rig_.left.height();
+  noise_mask_ = usable_mask(0, s_.search_radius + 1);
   luma_.width = rig_.left.width();
   luma_.height = rig_.left.height();
   luma_.left.assign(np, 0.f);
@@ -98,22 +126,13 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.right_search.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
   const int wide = std::max(s_.wide_radius, s_.lk.radius);
-  usable_wide_[0] = usable_mask(rig_.left, layout, wide);
-  usable_wide_[1] = usable_mask(rig_.right, layout, wide + 1);
+  usable_wide_[0] = usable_mask(0, wide);
+  usable_wide_[1] = usable_mask(1, wide + 1);
   init_wide();
   id_scratch_.assign(static_cast<std::size_t>(s_.max_features), 0);
-  rays_.assign(2 * np, 0.0);
   inv_norm_[0].assign(np, 0.f);
   inv_norm_[1].assign(np, 0.f);
   norm_scratch_.assign(2 * static_cast<std::size_t>(luma_.width), 0.0);
-  for (int r = 0; r < luma_.height; ++r)
-    for (int c = 0; c < luma_.width; ++c) {
-      const Undistorted u = rig_.left.undistort(Eigen::Vector2d(c, r));
-      if (!u.ok()) continue;  // never read: features' windows lie inside the domain
-      const std::size_t i = static_cast<std::size_t>(r) * luma_.width + c;
-      rays_[2 * i] = u.normalized.x();
-      rays_[2 * i + 1] = u.normalized.y();
-    }
   const int side = 2 * s_.lk.radius + 1;
   shape_.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
 }
