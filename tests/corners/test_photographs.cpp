@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/photo_frame.hpp"
 #include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::recon {
@@ -47,16 +48,6 @@ CameraModel opencv_camera(const std::vector<std::vector<cv::Point2f>>& corners, 
     for (int c = 0; c < 3; ++c) k(r, c) = K.at<double>(r, c);
   const Distortion d{D.at<double>(0), D.at<double>(1), D.at<double>(2), D.at<double>(3), D.at<double>(4)};
   return CameraModel(k, d, size.width, size.height);
-}
-
-// 8-bit grey -> 10-bit DN (x4), the scale the detector's physical constants are stated in.
-std::vector<std::uint16_t> to_dn(const cv::Mat& gray) {
-  std::vector<std::uint16_t> v(gray.total());
-  for (int r = 0; r < gray.rows; ++r)
-    for (int c = 0; c < gray.cols; ++c)
-      v[static_cast<std::size_t>(r * gray.cols + c)] =
-          static_cast<std::uint16_t>(4 * gray.at<unsigned char>(r, c));
-  return v;
 }
 
 // The board's plane as cornerSubPix's corners put it: the homography from the 9 x 6 grid to the
@@ -159,8 +150,8 @@ void check_photographs(int scale, int max_off_plane) {
       const cv::Mat& gray = im.gray;
       const char* name = im.name.c_str();
       const std::vector<cv::Point2f>& ref = im.ref;
-      const std::vector<std::uint16_t> dn = to_dn(gray);
-      const RawImageView v{dn.data(), gray.cols, gray.rows, gray.cols, PixelLayout::mono, 0, 0};
+      const test::PhotoFrame frame = test::photo_frame(gray);
+      const RawImageView v = frame.view();
       CornerResult res;
       const bool ok = det.detect_full(v, res);
       if (!ok) std::printf("%s: not found (%s)\n", name, to_string(det.last_failure()));
@@ -290,8 +281,8 @@ ReducedFigures check_reduced(int factor, double beyond_px) {
       std::vector<cv::Point2f> cv_corners;
       f.opencv += cv::findChessboardCorners(im.gray, cv::Size(9, 6), cv_corners,
                                             cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-      const std::vector<std::uint16_t> dn = to_dn(im.gray);
-      const RawImageView v{dn.data(), im.gray.cols, im.gray.rows, im.gray.cols, PixelLayout::mono, 0, 0};
+      const test::PhotoFrame frame = test::photo_frame(im.gray);
+      const RawImageView v = frame.view();
       CornerResult res;
       if (!det.detect_full(v, res)) {
         const CornerRejection& j = det.last_rejection();
@@ -392,9 +383,9 @@ TEST(Photographs, TheHeldBoardIsReturnedNotTheOneOnTheMonitor) {
   for (const auto& eye : photo_set().eyes) {
     for (const Image& im : eye) {
       ++images;
-      const std::vector<std::uint16_t> dn = to_dn(im.gray);
+      const test::PhotoFrame frame = test::photo_frame(im.gray);
       CornerResult res;
-      if (!det.detect_full(RawImageView{dn.data(), 640, 480, 640, PixelLayout::mono, 0, 0}, res)) continue;
+      if (!det.detect_full(frame.view(), res)) continue;
       // The monitor's board has squares of ~4.5 px, the held one of 25-45 px.
       const double square = (res.corners[1].px - res.corners[0].px).norm();
       EXPECT_GT(square, 15.0) << im.name << ": the monitor's board, not the held one";
@@ -435,8 +426,8 @@ TEST(Photographs, ALargerBoardWithItsNextRowPartlyHiddenIsNotTakenForTheSmallerP
             cv::Rect(0, 0, gray.cols, gray.rows)));
         cv::circle(gray, q, radius, mean, cv::FILLED, cv::LINE_AA);
       }
-      const std::vector<std::uint16_t> dn = to_dn(gray);
-      const RawImageView v{dn.data(), gray.cols, gray.rows, gray.cols, PixelLayout::mono, 0, 0};
+      const test::PhotoFrame frame = test::photo_frame(gray);
+      const RawImageView v = frame.view();
       CornerResult res;
       ++images;
       const bool ok = det.detect_full(v, res);

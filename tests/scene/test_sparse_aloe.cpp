@@ -15,6 +15,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <vector>
 
+#include "../support/photo_frame.hpp"
 #include "aloe_data.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 
@@ -27,8 +28,8 @@ constexpr double kFocal = 200;  // px; the pinhole rig's (any value: disparity =
 constexpr int kCropX = 320 - kSide;
 
 struct AloeCrop {
-  cv::Mat l8, r8, gt;  // 8-bit views and the left view's disparity (px, 0 = unknown)
-  std::vector<std::uint16_t> l16, r16;
+  cv::Mat l8, r8, gt;         // 8-bit views and the left view's disparity (px, 0 = unknown)
+  test::PhotoFrame l16, r16;  // as 10-bit frames: the path's thresholds are in DN of one
 };
 
 AloeCrop load_crop() {
@@ -39,14 +40,8 @@ AloeCrop load_crop() {
   a.l8 = q.l(roi).clone();
   a.r8 = q.r(roi).clone();
   a.gt = q.gt(roi).clone();
-  // 8 bits to the sensor's 10 (x 4): the path's thresholds are in DN of a 10-bit frame.
-  for (const auto& [src, dst] : {std::pair{&a.l8, &a.l16}, std::pair{&a.r8, &a.r16}}) {
-    dst->resize(static_cast<std::size_t>(kSide) * kSide);
-    for (int y = 0; y < kSide; ++y)
-      for (int x = 0; x < kSide; ++x)
-        (*dst)[static_cast<std::size_t>(y) * kSide + x] =
-            static_cast<std::uint16_t>(4 * src->at<std::uint8_t>(y, x));
-  }
+  a.l16 = test::photo_frame(a.l8);
+  a.r16 = test::photo_frame(a.r8);
   return a;
 }
 
@@ -85,13 +80,8 @@ struct Tally {
 Tally ours(const AloeCrop& a, const recon::scene::SparseSettings& s) {
   const recon::StereoRig rig = pinhole_rig();
   recon::scene::SparseReconstructor sr(rig, s);
-  recon::RawImageView lv, rv;
-  lv.data = a.l16.data();
-  rv.data = a.r16.data();
-  lv.ignore_last_cols = rv.ignore_last_cols = 0;
-  lv.ignore_edge_rows = rv.ignore_edge_rows = 0;
   recon::scene::SparseResult res;
-  sr.reconstruct(lv, rv, res);
+  sr.reconstruct(a.l16.view(), a.r16.view(), res);
   Tally t;
   for (const auto& p : res.points)
     if (p.valid()) t.add(p.left_px.x(), p.left_px.y(), p.left_px.x() - p.right_px.x(), a.gt);
@@ -113,7 +103,7 @@ Tally opencv(const AloeCrop& a) {
 TEST(SparseAloe, MatchesARealPhotographAndBeatsTheOpenCvPath) {
   if (!std::filesystem::exists(test::kAloeDir / "aloeGT.png")) GTEST_SKIP() << "opencv-doc is not installed";
   const AloeCrop a = load_crop();
-  ASSERT_FALSE(a.l16.empty());
+  ASSERT_FALSE(a.l16.dn.empty());
   double gmin = 1e9, gmax = 0;
   for (int y = 0; y < kSide; ++y)
     for (int x = 0; x < kSide; ++x)

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/photo_frame.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 #include "naneye/recon/scene/sparse.hpp"
 
@@ -142,23 +143,6 @@ bool on_board(const std::vector<cv::Point2f>& corners, const cv::Point2f& p) {
   return cv::pointPolygonTest(hull, p, false) > 0;
 }
 
-std::vector<std::uint16_t> to_dn(const cv::Mat& gray) {  // 8-bit -> 10-bit DN (x4)
-  std::vector<std::uint16_t> v(gray.total());
-  for (int r = 0; r < gray.rows; ++r)
-    for (int c = 0; c < gray.cols; ++c)
-      v[static_cast<std::size_t>(r * gray.cols + c)] = 4 * gray.at<uchar>(r, c);
-  return v;
-}
-
-RawImageView raw(const std::vector<std::uint16_t>& v, cv::Size size) {
-  RawImageView r;
-  r.data = v.data();
-  r.width = r.stride = size.width;
-  r.height = size.height;
-  r.ignore_last_cols = r.ignore_edge_rows = 0;  // a photograph: every pixel is image
-  return r;
-}
-
 struct Tally {
   std::vector<double> rel;  // |dZ| / Z of each point on the board
   double sum_z2 = 0;        // (dZ / sigma)^2 where a sigma is given
@@ -212,8 +196,8 @@ TEST(SparsePhotographs, OpenCvStereoSetGivesFewButRightPointsOnTheBoard) {
       z_lo = std::min(z_lo, z);
       z_hi = std::max(z_hi, z);
     }
-    const auto l = to_dn(v.left), r = to_dn(v.right);
-    sparse.reconstruct(raw(l, v.left.size()), raw(r, v.right.size()), res);
+    const test::PhotoFrame l = test::photo_frame(v.left), r = test::photo_frame(v.right);
+    sparse.reconstruct(l.view(), r.view(), res);
     for (const ScenePoint& p : res.points) {
       ++statuses[static_cast<std::size_t>(p.status)];
       if (!p.valid() || !on_board(v.cl, cv::Point2f(float(p.left_px.x()), float(p.left_px.y())))) continue;
