@@ -305,10 +305,7 @@ int main(int argc, char** argv) {
     recon::scene::MatchCounts mc;
     StatusRow st{};
     for (int s = 0; s < seeds; ++s) {
-      sim::TexturedSceneSettings scene = *sim::textured_preset(name);
-      scene.texture.seed += static_cast<std::uint64_t>(100 * s);
-      sim::Rng rng(1000 + static_cast<std::uint64_t>(s));
-      const sim::TexturedPair p = renderer.render(scene, rng);
+      const sim::TexturedPair p = sim::numbered_render(renderer, name, s);
       const auto lv = sim::raw_view(p.left, bayer), rv = sim::raw_view(p.right, bayer);
       const double t0 = thread_cpu_s();
       ours.reconstruct(lv, rv, res);

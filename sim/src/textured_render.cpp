@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 #include "naneye/driver/frame.hpp"
 #include "naneye/sim/textured.hpp"
@@ -236,6 +237,15 @@ TexturedPair TexturedRenderer::render(const TexturedSceneSettings& scene, Rng& r
   expose(1, light, rng, out.right);
   out.depth = truth_depth(scene.surface);
   return out;
+}
+
+TexturedPair numbered_render(const TexturedRenderer& renderer, const std::string& preset, int k) {
+  const std::optional<TexturedSceneSettings> found = textured_preset(preset);
+  if (!found) throw std::invalid_argument("numbered_render: unknown textured preset '" + preset + "'");
+  TexturedSceneSettings scene = *found;
+  scene.texture.seed += static_cast<std::uint64_t>(100 * k);
+  Rng rng(1000 + static_cast<std::uint64_t>(k));
+  return renderer.render(scene, rng);
 }
 
 }  // namespace naneye::sim

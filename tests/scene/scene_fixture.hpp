@@ -45,14 +45,4 @@ inline const sim::TexturedPair& textured_pair(const std::string& preset, bool ba
   return it->second;
 }
 
-// bench_scene's k-th render of a preset (k = 0, 1, 2): the texture seed moved by 100 k, the noise
-// seeded 1000 + k, so that a test's figures can be set beside the benchmark's.
-inline sim::TexturedPair bench_render(const sim::TexturedRenderer& renderer, const std::string& preset,
-                                      int k) {
-  sim::TexturedSceneSettings scene = *sim::textured_preset(preset);
-  scene.texture.seed += static_cast<std::uint64_t>(100 * k);
-  sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
-  return renderer.render(scene, rng);
-}
-
 }  // namespace naneye::test

@@ -98,7 +98,7 @@ TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
   int outliers[2] = {0, 0}, valid[2] = {0, 0}, flagged = 0, inliers = 0;
   double z2 = 0;
   for (int k = 0; k < 3; ++k) {  // bench_scene's three renders
-    const sim::TexturedPair p = test::bench_render(renderer, "plane-far", k);
+    const sim::TexturedPair p = sim::numbered_render(renderer, "plane-far", k);
     for (int flag = 0; flag < 2; ++flag) {
       recon::scene::SparseSettings s;
       if (!flag) s.max_depth_sigma_rel = std::numeric_limits<double>::infinity();
@@ -153,7 +153,7 @@ TEST(SparseRealSensor, FaintTubeKeepsItsPointsAndTheirSigmas) {
   int valid[2] = {0, 0}, outliers[2] = {0, 0}, unseen = 0, inliers = 0;
   double z2 = 0;
   for (int k = 0; k < 2; ++k) {
-    const sim::TexturedPair p = test::bench_render(renderer, "tube", k);
+    const sim::TexturedPair p = sim::numbered_render(renderer, "tube", k);
     for (int now = 0; now < 2; ++now) {
       recon::scene::SparseSettings s;
       if (!now) {

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/core.hpp>
+#include <stdexcept>
 
 #include "scene_fixture.hpp"
 
@@ -108,6 +110,19 @@ TEST(TexturedSim, RenderIsTexturedAndDarkBeyondTheFold) {
   const double mean = lit_sum / nl, sd = std::sqrt(lit_sq / nl - mean * mean);
   EXPECT_GT(mean, 150.0);
   EXPECT_GT(sd, 40.0);  // texture contrast well above the noise (~5 DN)
+}
+
+// The benchmarks' numbered renders (bench_scene, bench_scene_limits and the tests quoting them):
+// another number, another texture (not only other noise); an unknown name, an error.
+TEST(TexturedSim, NumberedRendersDifferByNumberAndRefuseUnknownNames) {
+  const auto& renderer = test::textured_renderer(false);
+  const sim::TexturedPair a = sim::numbered_render(renderer, "height", 1);
+  const sim::TexturedPair c = sim::numbered_render(renderer, "height", 2);
+  // The noise alone differs by ~5 DN; another texture by its contrast (~50 DN sd).
+  cv::Mat diff;
+  cv::absdiff(a.left, c.left, diff);
+  EXPECT_GT(cv::mean(diff)[0], 20.0);
+  EXPECT_THROW(sim::numbered_render(renderer, "cube", 0), std::invalid_argument);
 }
 
 }  // namespace

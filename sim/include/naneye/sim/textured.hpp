@@ -125,6 +125,10 @@ class TexturedRenderer {
 // each scene's depth (wavelengths ~4-20 px). Empty for an unknown name.
 std::optional<TexturedSceneSettings> textured_preset(const std::string& name);
 const std::vector<std::string>& textured_preset_names();
+// The k-th render (k = 0, 1, ...) of a preset in the scene benchmarks and the tests that quote
+// their figures: the texture seed moved by 100 k, the noise seeded 1000 + k. One rule, so that a
+// test's figures, bench_scene's and bench_scene_limits' are of the same pairs.
+TexturedPair numbered_render(const TexturedRenderer& renderer, const std::string& preset, int k);
 
 // A smooth hand-held trajectory: the camera drifting slowly around where the preset puts it (sums
 // of slow sines with incommensurate periods of 4-13 s, so it never repeats exactly): sideways and
