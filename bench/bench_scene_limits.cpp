@@ -195,7 +195,8 @@ void tally_pair(const cv::Mat& truth, const recon::scene::DepthMap& depth, const
       const double z = depth.z_at(u, v), sz = depth.sigma_at(u, v);
       const double sd = sz * fB / (z * z);  // the depth sigma as a rectified disparity sigma
       Honesty& h = t.honesty;
-      h.ratio.push_back(sd / bound.at<double>(v, u));
+      // No bound where the window had too little seen data for one (counted as not reachable).
+      if (std::isfinite(bound.at<double>(v, u))) h.ratio.push_back(sd / bound.at<double>(v, u));
       const int out = one.reachable ? 0 : 1;
       h.z2[out] += (z - zt) * (z - zt) / (sz * sz);
       h.bad5[out] += std::abs(z - zt) > 0.05 * zt;

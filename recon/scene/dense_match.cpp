@@ -286,7 +286,12 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
         continue;
       }
       const double zc = eiv_zc(i);
-      const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2_[i] * zc) / a_[i];
+      // The window's residual variance is a 49-121 pixel estimate (~20-30 % spread): one low by
+      // chance would claim less noise than the pair has for such a window. Never below the median of
+      // its kind; its own excess where it has one (the chi-square test below bounds that).
+      // docs/scene.md, "A floor under the window's noise".
+      const double s2 = std::max(static_cast<double>(s2_[i]), expected_residual(i));
+      const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2 * zc) / a_[i];
       if (!(sigma <= s_.max_sigma_px)) {
         ++c.texture;
         continue;

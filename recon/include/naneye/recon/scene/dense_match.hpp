@@ -10,8 +10,9 @@
 //      (Keys 1981), each pixel of the window warped by its own disparity (so slanted surfaces keep
 //      their shape); the window sums are box filters, so every pixel costs the same;
 //   3. sigma per pixel from the fit: s^2 (A^-1)_dd / a^2 (A the normal matrix, s^2 the window's
-//      residual variance), times the correlation factor of the residual noise measured on the pair
-//      itself (interpolation and a Bayer filter make neighbouring pixels' noise correlated);
+//      residual variance, floored at the median of windows of its kind), times the correlation
+//      factor of the residual noise measured on the pair itself (interpolation and a Bayer filter
+//      make neighbouring pixels' noise correlated);
 //   4. validity: refinement converged near the integer stage; sigma small enough that the integer
 //      stage's half-pixel basin holds at 3 sigma; the residual consistent with the pair's noise
 //      (a chi-square test against the median window); a left-right check (the integer stage's: the
