@@ -1,30 +1,17 @@
 // How much of each scene any matcher could give depth for at the dense path's precision bound, beside
 // what ours gives (issue 14: dense coverage >= 80 % of the pixels both eyes see).
 //
-// The bound: a disparity estimated from a window of two noisy images of the same texture cannot be
-// more precise than the Cramer-Rao bound of a shift, var(d) >= (sigma_l^2 + sigma_r^2) / sum_k g_k^2
-// (Kay, "Fundamentals of Statistical Signal Processing: Estimation Theory", 1993, Sec. 3.11: the
-// time-delay estimate), g the noise-free texture's gradient along the epipolar curve, with the gain
-// and offset between the eyes the matcher also fits (L = a R + b, dense_match.hpp) projected out of g
-// (their Fisher information removes that part of it). The dense path refuses a pixel whose disparity
-// sigma exceeds MatcherSettings::max_sigma_px (a third of the integer stage's half-pixel basin), so a
-// pixel whose bound exceeds it is one no honest matcher with that rule can give: "reachable" below is
-// the share of the pixels both eyes see where the bound is within it.
-//
-// Per pixel (left raw grid, where the truth has a depth): the window (2 r + 1)^2 the matcher chose for
-// the pair (its pixels that see the surface), the noise-free render's gradient along the left
-// epipolar direction there, the sensor model's per-pixel noise variance (shot, read, fixed patterns,
-// quantisation) at the noise-free signal, and the bound converted from raw pixels along the curve to
-// the rectified disparity (d = f B w, f the left fx: dense_rectify.hpp) through the right curve's
-// speed |d x_r / d w| at the true depth. Mono only (a Bayer luminance's noise is filtered: its bound
-// needs the filter's correlation, not done here).
+// The bound (sim/disparity_bound.hpp): the Cramer-Rao bound of the disparity at each pixel from
+// the render's noise-free twin and the sensor model's noise, at the window the matcher chose for the
+// pair. The dense path refuses a pixel whose disparity sigma exceeds MatcherSettings::max_sigma_px
+// (a third of the integer stage's half-pixel basin), so a pixel whose bound exceeds it is one no
+// honest matcher with that rule can give: "reachable" below is the share of the pixels both eyes
+// see where the bound is within it. Mono only.
 //
 //   build/bench/bench_scene_limits [--seeds N] [--real-sensor] [--defocus SIGMA] [--dense-radius R]
 // --dense-radius R: the matcher's window fixed at R (as bench_scene's), the bound at the same window.
 // --maps DIR: per render DIR/limits-SCENE-K.png (left raw grid, x2): green reachable and ours, red
 // reachable and not ours, magenta ours beyond the reachable, grey neither, black not seen by both.
-#include <Eigen/Core>
-#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -40,6 +27,7 @@
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
+#include "naneye/sim/disparity_bound.hpp"
 #include "naneye/sim/textured.hpp"
 
 namespace {
@@ -53,82 +41,6 @@ int band_of(double z) {
   for (int b = 0; b < kBands; ++b)
     if (z < kBandEdges[static_cast<std::size_t>(b) + 1]) return b;
   return kBands - 1;
-}
-
-// The texture's derivative by the 8th-order central difference (Fornberg 1988): the bound needs the
-// signal's own slope, and the 2-tap difference (x[+1] - x[-1]) / 2 reads sin(w) / w of it, 64 % at
-// the presets' shortest wavelength (4 px, w = pi / 2), which would overstate the bound by 1.6x
-// there; this one reads 97 % of it.
-constexpr int kDiffReach = 4;
-constexpr std::array<double, kDiffReach> kDiff{4.0 / 5, -1.0 / 5, 4.0 / 105, -1.0 / 280};
-
-// Per-pixel noise variance of one eye at a noise-free value (DN^2): the sensor model's shot and read
-// noise (sim/sensor.cpp), its fixed patterns (independent between the eyes, so noise to a matcher)
-// and the 10-bit quantisation.
-double noise_var_dn2(const sim::SensorSettings& s, double clean_dn) {
-  const double signal = std::max(0.0, clean_dn - s.black_level_dn);
-  return signal / s.gain_e_per_dn + s.read_noise_dn * s.read_noise_dn + s.column_fpn_dn * s.column_fpn_dn +
-         s.dsnu_dn * s.dsnu_dn + (s.prnu * signal) * (s.prnu * signal) + 1.0 / 12;
-}
-
-// The bound per left raw pixel (rectified disparity px; NaN where the truth has no depth).
-cv::Mat disparity_bound(const recon::StereoRig& rig, const sim::SensorSettings& sensor, const cv::Mat& clean,
-                        const cv::Mat& truth, int r) {
-  const int w = clean.cols, h = clean.rows;
-  cv::Mat s(h, w, CV_64FC1), ge(h, w, CV_64FC1, cv::Scalar(0)), speed(h, w, CV_64FC1, cv::Scalar(NAN));
-  clean.convertTo(s, CV_64F);
-  const Eigen::Vector3d C_r = -rig.R.transpose() * rig.T;  // the right centre in the left frame
-  for (int v = kDiffReach; v < h - kDiffReach; ++v)
-    for (int u = kDiffReach; u < w - kDiffReach; ++u) {
-      const double z = truth.at<double>(v, u);
-      if (!std::isfinite(z)) continue;
-      const auto und = rig.left.undistort(Eigen::Vector2d(u, v));
-      if (!und.ok()) continue;
-      const Eigen::Vector3d X = Eigen::Vector3d(und.normalized.x(), und.normalized.y(), 1.0) * z;
-      // The left epipolar direction: the image of the line from X towards the right centre.
-      const Eigen::Vector2d x0 = rig.left.project(X), x1 = rig.left.project(X + 1e-3 * (C_r - X));
-      const Eigen::Vector2d e = (x1 - x0).normalized();
-      double gx = 0, gy = 0;
-      for (int j = 1; j <= kDiffReach; ++j) {
-        const double cj = kDiff[static_cast<std::size_t>(j) - 1];
-        gx += cj * (s.at<double>(v, u + j) - s.at<double>(v, u - j));
-        gy += cj * (s.at<double>(v + j, u) - s.at<double>(v - j, u));
-      }
-      ge.at<double>(v, u) = gx * e.x() + gy * e.y();
-      // The right curve's speed, raw px per unit inverse depth (mm^-1), by a +-1 % central difference.
-      const Eigen::Vector3d ray = X / z;
-      const auto right_at = [&](double wi) { return rig.right.project(rig.R * ray / wi + rig.T); };
-      const double w0 = 1.0 / z;
-      speed.at<double>(v, u) = (right_at(1.01 * w0) - right_at(0.99 * w0)).norm() / (0.02 * w0);
-    }
-  const double fB = rig.left.fx() * rig.T.norm();  // rectified disparity per unit inverse depth
-  cv::Mat bound(h, w, CV_64FC1, cv::Scalar(NAN));
-  for (int v = r; v < h - r; ++v)
-    for (int u = r; u < w - r; ++u) {
-      if (!std::isfinite(speed.at<double>(v, u))) continue;
-      // Least squares of g on (1, s) over the window's seen pixels; sum of the residual g^2.
-      Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
-      Eigen::Vector2d b = Eigen::Vector2d::Zero();
-      double gg = 0, var = 0;
-      int n = 0;
-      for (int dr = -r; dr <= r; ++dr)
-        for (int dc = -r; dc <= r; ++dc) {
-          if (!std::isfinite(truth.at<double>(v + dr, u + dc))) continue;
-          const double sv = s.at<double>(v + dr, u + dc), g = ge.at<double>(v + dr, u + dc);
-          const Eigen::Vector2d a(1.0, sv);
-          A += a * a.transpose();
-          b += a * g;
-          gg += g * g;
-          var += noise_var_dn2(sensor, sv);
-          ++n;
-        }
-      if (n < 3) continue;
-      if (!(A.determinant() > 0)) continue;
-      const double perp = gg - b.dot(A.inverse() * b);
-      const double sigma_raw = std::sqrt(2.0 * (var / n) / std::max(perp, 1e-300));
-      bound.at<double>(v, u) = sigma_raw / speed.at<double>(v, u) * fB;
-    }
-  return bound;
 }
 
 // What one scene's renders give, per pixel both eyes see.
@@ -270,14 +182,7 @@ int main(int argc, char** argv) {
   }
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
-  // The noise-free twin: the same light, blur and exposure; no temporal noise, fixed patterns or
-  // defects (their variance enters the bound through noise_var_dn2 instead).
-  sim::SensorSettings quiet = sensor;
-  quiet.noise = false;
-  quiet.column_fpn_dn = quiet.dsnu_dn = quiet.prnu = 0;
-  quiet.defect_pixels = 0;
-  quiet.reset_rows = 0;
-  const sim::TexturedRenderer renderer(rig, sensor), clean_renderer(rig, quiet);
+  const sim::TexturedRenderer renderer(rig, sensor), clean_renderer(rig, sim::noise_free_twin(sensor));
   recon::scene::SparseReconstructor sparse(rig);  // its luminance feeds the dense path, as in the daemon
   recon::scene::SparseResult points;
   recon::scene::DenseReconstructor dense(rig, ds);
@@ -300,7 +205,7 @@ int main(int argc, char** argv) {
       dense.reconstruct(sparse.luma(), depth);
       const int r = dense.matcher().radius_used();
       t.radii += (t.radii.empty() ? "" : " ") + std::to_string(r);
-      const cv::Mat bound = disparity_bound(rig, sensor, c.left, p.depth, r);
+      const cv::Mat bound = sim::disparity_bound(rig, sensor, c.left, p.depth, r);
       cv::Mat map;
       tally_pair(p.depth, depth, bound, r, max_sigma, fB, t, maps.empty() ? nullptr : &map);
       if (!maps.empty()) {
