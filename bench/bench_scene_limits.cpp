@@ -15,13 +15,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "naneye/recon/camera/calibration_io.hpp"
@@ -79,7 +82,7 @@ double pct(long a, long b) {
 // One pair: our depth map against the bound at the matcher's window r. `map` (optional, CV_8UC3):
 // green reachable and ours, red reachable and lost, magenta ours beyond the reachable, grey neither.
 void tally_pair(const cv::Mat& truth, const recon::scene::DepthMap& depth, const cv::Mat& bound, int r,
-                double max_sigma, double fB, SceneTally& t, cv::Mat* map) {
+                double max_sigma, const recon::StereoRig& rig, SceneTally& t, cv::Mat* map) {
   cv::Mat seen = cv::Mat::zeros(truth.size(), CV_8UC1);
   for (int v = 0; v < truth.rows; ++v)
     for (int u = 0; u < truth.cols; ++u) seen.at<std::uint8_t>(v, u) = std::isfinite(truth.at<double>(v, u));
@@ -105,7 +108,7 @@ void tally_pair(const cv::Mat& truth, const recon::scene::DepthMap& depth, const
       }
       if (!one.ours) continue;
       const double z = depth.z_at(u, v), sz = depth.sigma_at(u, v);
-      const double sd = sz * fB / (z * z);  // the depth sigma as a rectified disparity sigma
+      const double sd = sim::disparity_sigma(rig, Eigen::Vector2d(u, v), z, sz);
       Honesty& h = t.honesty;
       // No bound where the window had too little seen data for one (counted as not reachable).
       if (std::isfinite(bound.at<double>(v, u))) h.ratio.push_back(sd / bound.at<double>(v, u));
@@ -180,6 +183,11 @@ int main(int argc, char** argv) {
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--maps") && i + 1 < argc) maps = argv[++i];
   }
+  if (seeds < 1) {
+    std::fprintf(stderr, "bench_scene_limits: --seeds must be >= 1\n");
+    return 2;
+  }
+  if (!maps.empty()) std::filesystem::create_directories(maps);
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
   const sim::TexturedRenderer renderer(rig, sensor), clean_renderer(rig, sim::noise_free_twin(sensor));
@@ -188,7 +196,6 @@ int main(int argc, char** argv) {
   recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap depth;
   const double max_sigma = dense.settings().matcher.max_sigma_px;
-  const double fB = rig.left.fx() * rig.T.norm();  // rectified disparity per unit inverse depth
   std::printf("bench_scene_limits: %d renders per scene, mono, blur sigma %.2f px, %s; sigma bound %.3f px\n",
               seeds, sensor.blur_sigma_px(),
               sensor.dsnu_dn > 0 ? "the real sensor's noise and fixed patterns" : "the simulator's sensor",
@@ -207,12 +214,12 @@ int main(int argc, char** argv) {
       t.radii += (t.radii.empty() ? "" : " ") + std::to_string(r);
       const cv::Mat bound = sim::disparity_bound(rig, sensor, c.left, p.depth, r);
       cv::Mat map;
-      tally_pair(p.depth, depth, bound, r, max_sigma, fB, t, maps.empty() ? nullptr : &map);
+      tally_pair(p.depth, depth, bound, r, max_sigma, rig, t, maps.empty() ? nullptr : &map);
       if (!maps.empty()) {
         cv::resize(map, map, cv::Size(), 2, 2, cv::INTER_NEAREST);
-        cv::imwrite(
-            (std::filesystem::path(maps) / ("limits-" + name + "-" + std::to_string(k) + ".png")).string(),
-            map);
+        const auto file = std::filesystem::path(maps) / ("limits-" + name + "-" + std::to_string(k) + ".png");
+        if (!cv::imwrite(file.string(), map))
+          std::fprintf(stderr, "bench_scene_limits: cannot write %s\n", file.c_str());
       }
     }
     print_coverage(name, t, seeds);

@@ -290,7 +290,9 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       // chance would claim less noise than the pair has for such a window. Never below the median of
       // its kind; its own excess where it has one (the chi-square test below bounds that).
       // docs/scene.md, "A floor under the window's noise".
-      const double s2 = std::max(static_cast<double>(s2_[i]), expected_residual(i));
+      // (No median at all, when no window had a residual: the window's own.)
+      const double kind = expected_residual(i);
+      const double s2 = std::isfinite(kind) ? std::max(static_cast<double>(s2_[i]), kind) : s2_[i];
       const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2 * zc) / a_[i];
       if (!(sigma <= s_.max_sigma_px)) {
         ++c.texture;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "naneye/recon/scene/rectified_axes.hpp"
 #include "resample_kernels.hpp"
 
 namespace naneye::recon::scene {
@@ -39,21 +40,23 @@ bool taps_active(const cv::Mat& active, const Eigen::Vector2d& px) {
 
 }  // namespace
 
+Eigen::Matrix3d rect_from_left(const StereoRig& rig) {
+  const Eigen::Vector3d e1 = rig.right_center().normalized();
+  const Eigen::Vector3d zl(0, 0, 1), zr = rig.R.transpose() * Eigen::Vector3d(0, 0, 1);
+  const Eigen::Vector3d e2 = (zl + zr).normalized().cross(e1).normalized();
+  Eigen::Matrix3d R;
+  R.row(0) = e1.transpose();
+  R.row(1) = e2.transpose();
+  R.row(2) = e1.cross(e2).transpose();
+  return R;
+}
+
 RectifiedRig build_rectified_rig(const StereoRig& rig, const cv::Mat& active_left,
                                  const cv::Mat& active_right, int pad_left_px) {
   RectifiedRig out;
-  const Eigen::Vector3d C = rig.right_center();
-  out.baseline_mm = C.norm();
-  // Rectified axes (Bouguet's construction, as in cv::stereoRectify): x along the baseline, z the
-  // mean of both optical axes made orthogonal to it, y = z x x. Sharing the rotation between the
-  // eyes keeps both views' periphery equally stretched.
-  const Eigen::Vector3d e1 = C / out.baseline_mm;
-  const Eigen::Vector3d zl(0, 0, 1), zr = rig.R.transpose() * Eigen::Vector3d(0, 0, 1);
-  const Eigen::Vector3d e2 = (zl + zr).normalized().cross(e1).normalized();
-  const Eigen::Vector3d e3 = e1.cross(e2);
-  out.R_left_rect.row(0) = e1.transpose();
-  out.R_left_rect.row(1) = e2.transpose();
-  out.R_left_rect.row(2) = e3.transpose();
+  out.baseline_mm = rig.right_center().norm();
+  // One rotation for both eyes (rectified_axes.hpp) keeps both views' periphery equally stretched.
+  out.R_left_rect = rect_from_left(rig);
   out.R_right_rect = out.R_left_rect * rig.R.transpose();
   out.f = rig.left.fx();
 

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
+
+#include "naneye/recon/scene/rectified_axes.hpp"
 
 namespace naneye::sim {
 namespace {
@@ -16,6 +19,49 @@ namespace {
 constexpr int kDiffReach = 4;
 constexpr std::array<double, kDiffReach> kDiff{4.0 / 5, -1.0 / 5, 4.0 / 105, -1.0 / 280};
 
+// Per seen pixel (NaN elsewhere): the texture's slope along the left epipolar line (DN per left raw
+// px) and that line's scale, left raw px per rectified disparity px. Both from the right eye's ray
+// through the seen point X: as the point slides along it, the left pixel moves along the epipolar
+// line while the rectified disparity f B / Z_rect changes (rectified_axes.hpp).
+struct EpipolarSlope {
+  cv::Mat slope, px_per_disparity;
+};
+
+EpipolarSlope epipolar_slope(const recon::StereoRig& rig, const cv::Mat& clean, const cv::Mat& truth) {
+  const int cols = clean.cols, rows = clean.rows;
+  cv::Mat s;
+  clean.convertTo(s, CV_64F);
+  EpipolarSlope out{cv::Mat(rows, cols, CV_64FC1, cv::Scalar(NAN)),
+                    cv::Mat(rows, cols, CV_64FC1, cv::Scalar(NAN))};
+  const Eigen::Vector3d C_r = rig.right_center();
+  const Eigen::RowVector3d z_rect = recon::scene::rect_from_left(rig).row(2);
+  const double fB = rig.left.fx() * C_r.norm();  // the rectified focal length is the left fx
+  // The stencil never reads the last column (the sensor's padding, driver/frame.hpp).
+  for (int v = kDiffReach; v < rows - kDiffReach; ++v)
+    for (int u = kDiffReach; u < cols - 1 - kDiffReach; ++u) {
+      const double z = truth.at<double>(v, u);
+      if (!std::isfinite(z)) continue;
+      const auto und = rig.left.undistort(Eigen::Vector2d(u, v));
+      if (!und.ok()) continue;
+      const Eigen::Vector3d X = Eigen::Vector3d(und.normalized.x(), und.normalized.y(), 1.0) * z;
+      // +-1 % along the right ray from its centre: ~0.1-1 px, short against the line's bending.
+      const Eigen::Vector3d Yp = C_r + 1.01 * (X - C_r), Ym = C_r + 0.99 * (X - C_r);
+      const Eigen::Vector2d dx = rig.left.project(Yp) - rig.left.project(Ym);
+      const double dd = fB / z_rect.dot(Yp) - fB / z_rect.dot(Ym);
+      if (!(dx.norm() > 0 && std::abs(dd) > 0)) continue;
+      const Eigen::Vector2d e = dx.normalized();
+      double gx = 0, gy = 0;
+      for (int j = 1; j <= kDiffReach; ++j) {
+        const double cj = kDiff[static_cast<std::size_t>(j) - 1];
+        gx += cj * (s.at<double>(v, u + j) - s.at<double>(v, u - j));
+        gy += cj * (s.at<double>(v + j, u) - s.at<double>(v - j, u));
+      }
+      out.slope.at<double>(v, u) = gx * e.x() + gy * e.y();
+      out.px_per_disparity.at<double>(v, u) = dx.norm() / std::abs(dd);
+    }
+  return out;
+}
+
 }  // namespace
 
 double noise_variance_dn2(const SensorSettings& s, double clean_dn) {
@@ -24,63 +70,58 @@ double noise_variance_dn2(const SensorSettings& s, double clean_dn) {
          s.dsnu_dn * s.dsnu_dn + (s.prnu * signal) * (s.prnu * signal) + 1.0 / 12;
 }
 
-cv::Mat disparity_bound(const recon::StereoRig& rig, const SensorSettings& sensor, const cv::Mat& clean,
+cv::Mat disparity_bound(const recon::StereoRig& rig, const SensorSettings& sensor, const cv::Mat& clean_left,
                         const cv::Mat& truth, int r) {
-  const int w = clean.cols, h = clean.rows;
-  cv::Mat s(h, w, CV_64FC1), ge(h, w, CV_64FC1, cv::Scalar(0)), speed(h, w, CV_64FC1, cv::Scalar(NAN));
-  clean.convertTo(s, CV_64F);
-  const Eigen::Vector3d C_r = -rig.R.transpose() * rig.T;  // the right centre in the left frame
-  for (int v = kDiffReach; v < h - kDiffReach; ++v)
-    for (int u = kDiffReach; u < w - kDiffReach; ++u) {
-      const double z = truth.at<double>(v, u);
-      if (!std::isfinite(z)) continue;
-      const auto und = rig.left.undistort(Eigen::Vector2d(u, v));
-      if (!und.ok()) continue;
-      const Eigen::Vector3d X = Eigen::Vector3d(und.normalized.x(), und.normalized.y(), 1.0) * z;
-      // The left epipolar direction: the image of the line from X towards the right centre.
-      const Eigen::Vector2d x0 = rig.left.project(X), x1 = rig.left.project(X + 1e-3 * (C_r - X));
-      const Eigen::Vector2d e = (x1 - x0).normalized();
-      double gx = 0, gy = 0;
-      for (int j = 1; j <= kDiffReach; ++j) {
-        const double cj = kDiff[static_cast<std::size_t>(j) - 1];
-        gx += cj * (s.at<double>(v, u + j) - s.at<double>(v, u - j));
-        gy += cj * (s.at<double>(v + j, u) - s.at<double>(v - j, u));
-      }
-      ge.at<double>(v, u) = gx * e.x() + gy * e.y();
-      // The right curve's speed, raw px per unit inverse depth (mm^-1), by a +-1 % central difference.
-      const Eigen::Vector3d ray = X / z;
-      const auto right_at = [&](double wi) { return rig.right.project(rig.R * ray / wi + rig.T); };
-      const double w0 = 1.0 / z;
-      speed.at<double>(v, u) = (right_at(1.01 * w0) - right_at(0.99 * w0)).norm() / (0.02 * w0);
-    }
-  const double fB = rig.left.fx() * rig.T.norm();  // rectified disparity per unit inverse depth
-  cv::Mat bound(h, w, CV_64FC1, cv::Scalar(NAN));
-  for (int v = r; v < h - r; ++v)
-    for (int u = r; u < w - r; ++u) {
-      if (!std::isfinite(speed.at<double>(v, u))) continue;
-      // Least squares of g on (1, s) over the window's seen pixels; sum of the residual g^2.
+  if (sensor.bayer) throw std::invalid_argument("disparity_bound: mono renders only");
+  if (clean_left.type() != CV_16UC1 || truth.type() != CV_64FC1 || clean_left.size() != truth.size() || r < 1)
+    throw std::invalid_argument(
+        "disparity_bound: a CV_16UC1 frame, its CV_64FC1 truth of the same size, r >= 1");
+  const EpipolarSlope ep = epipolar_slope(rig, clean_left, truth);
+  cv::Mat bound(truth.size(), CV_64FC1, cv::Scalar(NAN));
+  for (int v = r; v < truth.rows - r; ++v)
+    for (int u = r; u < truth.cols - r; ++u) {
+      const double scale = ep.px_per_disparity.at<double>(v, u);
+      if (!std::isfinite(scale)) continue;
+      // Least squares of the slope g on (1, level) over the window's pixels that have one: the
+      // gain and offset's part of it; what is left fixes the shift. The noise variance is the
+      // window's mean (uniform weights, as the matcher's box sums have), each pixel's taken as
+      // independent (the column FPN is not, down a column: the bound is a little optimistic at
+      // --real-sensor).
       Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
       Eigen::Vector2d b = Eigen::Vector2d::Zero();
       double gg = 0, var = 0;
       int n = 0;
       for (int dr = -r; dr <= r; ++dr)
         for (int dc = -r; dc <= r; ++dc) {
-          if (!std::isfinite(truth.at<double>(v + dr, u + dc))) continue;
-          const double sv = s.at<double>(v + dr, u + dc), g = ge.at<double>(v + dr, u + dc);
-          const Eigen::Vector2d a(1.0, sv);
+          const double g = ep.slope.at<double>(v + dr, u + dc);
+          if (!std::isfinite(g)) continue;
+          const double level = clean_left.at<std::uint16_t>(v + dr, u + dc);
+          const Eigen::Vector2d a(1.0, level);
           A += a * a.transpose();
           b += a * g;
           gg += g * g;
-          var += noise_variance_dn2(sensor, sv);
+          var += noise_variance_dn2(sensor, level);
           ++n;
         }
-      if (n < 3) continue;
-      if (!(A.determinant() > 0)) continue;
+      if (n < 3 || !(A.determinant() > 0)) continue;
       const double perp = gg - b.dot(A.inverse() * b);
-      const double sigma_raw = std::sqrt(2.0 * (var / n) / std::max(perp, 1e-300));
-      bound.at<double>(v, u) = sigma_raw / speed.at<double>(v, u) * fB;
+      if (!(perp > 0)) continue;  // a flat window fixes no shift: no bound
+      // Both eyes' noise: var(d) >= (sigma_l^2 + sigma_r^2) / sum g_perp^2, in left raw px along
+      // the line, then in rectified disparity px.
+      bound.at<double>(v, u) = std::sqrt(2.0 * (var / n) / perp) / scale;
     }
   return bound;
+}
+
+double disparity_sigma(const recon::StereoRig& rig, const Eigen::Vector2d& left_px, double z_mm,
+                       double sigma_z_mm) {
+  const auto und = rig.left.undistort(left_px);
+  if (!und.ok()) return NAN;
+  // d = f B / Z_rect with Z_rect = Z (z_rect . ray): d d / d Z = -d / Z.
+  const Eigen::Vector3d ray(und.normalized.x(), und.normalized.y(), 1.0);
+  const double d =
+      rig.left.fx() * rig.right_center().norm() / (z_mm * recon::scene::rect_from_left(rig).row(2).dot(ray));
+  return sigma_z_mm * d / z_mm;
 }
 
 SensorSettings noise_free_twin(const SensorSettings& s) {

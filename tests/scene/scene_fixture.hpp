@@ -24,13 +24,16 @@ inline std::string preset_case_name(const ::testing::TestParamInfo<std::tuple<st
   return n + (std::get<1>(info.param) ? "_bayer" : "_mono");
 }
 
+// The sensor of the shared renders: the simulator's default, mono or GRBG.
+inline sim::SensorSettings textured_sensor(bool bayer) {
+  sim::SensorSettings s;
+  s.bayer = bayer;
+  return s;
+}
+
 inline const sim::TexturedRenderer& textured_renderer(bool bayer) {
-  static const sim::TexturedRenderer mono(paper_d3(), sim::SensorSettings{});
-  static const sim::TexturedRenderer colour(paper_d3(), [] {
-    sim::SensorSettings s;
-    s.bayer = true;
-    return s;
-  }());
+  static const sim::TexturedRenderer mono(paper_d3(), textured_sensor(false));
+  static const sim::TexturedRenderer colour(paper_d3(), textured_sensor(true));
   return bayer ? colour : mono;
 }
 

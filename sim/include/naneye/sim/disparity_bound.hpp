@@ -13,6 +13,7 @@
 // the curve to the rectified disparity (d = f B w, f the left fx: the dense path's rectification)
 // through the right curve's speed |d x_r / d w| at the true depth. Mono renders only (a Bayer
 // luminance's noise is filtered: its bound needs the filter's correlation).
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "naneye/recon/camera/rig.hpp"
@@ -28,12 +29,19 @@ double noise_variance_dn2(const SensorSettings& s, double clean_dn);
 // The bound per left raw pixel, rectified disparity px (CV_64FC1), over the (2 r + 1)^2 window's
 // pixels that see the surface; NaN where `truth` (the render's depth, NaN where not both eyes see
 // the surface) has none or the window holds no slope. `clean_left`: the noise-free twin's left raw
-// frame (CV_16UC1, noise_free_twin below).
+// frame (CV_16UC1, noise_free_twin below). Throws std::invalid_argument for a Bayer sensor or
+// mismatched images.
 cv::Mat disparity_bound(const recon::StereoRig& rig, const SensorSettings& sensor, const cv::Mat& clean_left,
                         const cv::Mat& truth, int r);
 
+// A depth's sigma at a left raw pixel as the dense path's rectified disparity sigma (what the bound
+// is in): sigma_d = sigma_Z d / Z, d = f B / Z_rect. NaN beyond the left fold.
+double disparity_sigma(const recon::StereoRig& rig, const Eigen::Vector2d& left_px, double z_mm,
+                       double sigma_z_mm);
+
 // The same light, blur and exposure without temporal noise, fixed patterns, defects or the reset
-// line (their variance enters the bound through noise_variance_dn2 instead).
+// line: the noise-free signal the bound's slopes and noise_variance_dn2 are taken from (defects and
+// the reset line are left out of the bound: a few pixels and rows).
 SensorSettings noise_free_twin(const SensorSettings& s);
 
 }  // namespace naneye::sim
