@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "lk_dots.hpp"
 #include "lk_sample.hpp"
 #include "round.hpp"
 #include "spd_factor.hpp"
@@ -34,7 +35,21 @@ Eigen::Matrix<double, D, D> kernel_outer(const std::array<float, 9>& b,
   return out;
 }
 constexpr int kMaxN = 15 * 15;
+constexpr int kMaxN8 = lk_dots::padded(kMaxN);
 
+// H(i, j) = sum_k a_i[k] b_j[k] for j >= i, mirrored: the 21 distinct entries as dot products.
+// a_i is b_i itself or b_i on a subset of the pixels (0 elsewhere): then a_i b_i = a_i^2.
+Eigen::Matrix<double, 6, 6> gram(const float (&a)[6][kMaxN8], const float (&b)[6][kMaxN8], int n8) {
+  Eigen::Matrix<double, 6, 6> H;
+  double row[6];
+  for (int i = 0; i < 6; ++i) {
+    const float* bs[5];
+    for (int j = i + 1; j < 6; ++j) bs[j - i - 1] = b[j];
+    lk_dots::dot_many(a[i], 0.f, bs, 5 - i, n8, row);
+    for (int j = i; j < 6; ++j) H(i, j) = H(j, i) = row[j - i];
+  }
+  return H;
+}
 // Rows 4 and 5 of the inverse of a factored symmetric 6 x 6 (its columns 4 and 5, transposed):
 // the translation's part of a solve.
 Eigen::Matrix<double, 2, 6> translation_rows(const SpdFactor<6>& f) {
@@ -60,16 +75,7 @@ double gradient_noise_ratio(const std::array<float, 9>& b) {
   return g2 / b2;
 }
 
-void add_moments(std::array<double, 6>& m, double x, double y) {
-  m[0] += x * x;
-  m[1] += x * y;
-  m[2] += y * y;
-  m[3] += x;
-  m[4] += y;
-  m[5] += 1;
-}
-
-// sum u u^T, u = (x, y, 1), from add_moments' sums.
+// sum u u^T, u = (x, y, 1), from the sums of x^2, x y, y^2, x, y, 1.
 Eigen::Matrix3d moment_matrix(const std::array<double, 6>& m) {
   Eigen::Matrix3d u;
   u << m[0], m[1], m[3], m[1], m[2], m[4], m[3], m[4], m[5];
@@ -96,53 +102,86 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   LkResult out;
   const int rad = s.radius, side = 2 * rad + 1, n = side * side;
   if (n > kMaxN || n <= 8) return out;
-  // Template, normalised to zero mean and unit norm (and its gradients by the same scale).
-  std::array<float, kMaxN> t{};
-  std::array<Eigen::Matrix<double, 6, 1>, kMaxN> sd;
+  const int n8 = lk_dots::padded(n);
+  // Template, normalised to zero mean and unit norm (and its gradients by the same scale). t and the
+  // steepest-descent images as float arrays for lk_dots, zero beyond n.
+  alignas(32) float t[kMaxN8];
+  alignas(32) float sdf[6][kMaxN8];
+  alignas(32) float sd_in[6][kMaxN8];  // sdf on the inner pixels, 0 on the ring (inner_radius only)
+  alignas(32) float ones[kMaxN8], inner[kMaxN8];  // 1 on the window (its inner pixels), else 0
+  // The warp's domain: the template pixels themselves, or their predicted places in the target
+  // (`shape`), where the template's gradient is d T / d q = d T / d x * A0^-1 (A0 varies little over
+  // the window; a gradient slightly off only slows convergence, the fixed point stays).
+  alignas(32) float qx[kMaxN8], qy[kMaxN8];
+  alignas(32) float gx[kMaxN8], gy[kMaxN8];  // the template's raw gradients
   double mean = 0;
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
-    for (int dc = -rad; dc <= rad; ++dc, ++k) mean += t[k] = src.at(u + dc, v + dr);
+    for (int dc = -rad; dc <= rad; ++dc, ++k) {
+      const std::size_t p = static_cast<std::size_t>(v + dr) * src.width + u + dc;
+      mean += t[k] = src.data[p];
+      qx[k] = shape ? static_cast<float>(shape[k].x()) : static_cast<float>(dc);
+      qy[k] = shape ? static_cast<float>(shape[k].y()) : static_cast<float>(dr);
+      gx[k] = tgx[p];
+      gy[k] = tgy[p];
+      ones[k] = 1.f;
+      inner[k] = s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius ? 1.f : 0.f;
+    }
+  for (int k = n; k < n8; ++k) t[k] = qx[k] = qy[k] = gx[k] = gy[k] = ones[k] = inner[k] = 0.f;
   mean /= n;
   double ss = 0;
   for (int k = 0; k < n; ++k) ss += (t[k] - mean) * (t[k] - mean);
   if (!(ss > 0)) return out;
   const double scale = 1.0 / std::sqrt(ss);
-  // The warp's domain: the template pixels themselves, or their predicted places in the target
-  // (`shape`), where the template's gradient is d T / d q = d T / d x * A0^-1 (A0 varies little over
-  // the window; a gradient slightly off only slows convergence, the fixed point stays).
-  std::array<Eigen::Vector2d, kMaxN> q;
-  std::array<float, kMaxN> qx{}, qy{};  // q as the sampling kernel reads it
+  for (int k = 0; k < n; ++k) t[k] = static_cast<float>((t[k] - mean) * scale);
   const Eigen::Matrix2d to_q = shape ? Eigen::Matrix2d(A0.inverse()) : Eigen::Matrix2d::Identity();
-  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 6> Hin = H;  // over the inner pixels (LkSettings::inner_radius)
+  // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5): sd = (gqx qx, gqx qy, gqy qx, gqy qy,
+  // gqx, gqy) with the gradient in q, gq = scale (gx, gy) to_q. Plain loops over whole blocks (zero
+  // padding stays zero), which GCC vectorises.
+  const Eigen::Matrix2f G = (scale * to_q).cast<float>();
+  for (int k = 0; k < n8; ++k) {
+    const float a = gx[k] * G(0, 0) + gy[k] * G(1, 0), b = gx[k] * G(0, 1) + gy[k] * G(1, 1);
+    sdf[0][k] = a * qx[k];
+    sdf[1][k] = a * qy[k];
+    sdf[2][k] = b * qx[k];
+    sdf[3][k] = b * qy[k];
+    sdf[4][k] = a;
+    sdf[5][k] = b;
+  }
+  if (s.inner_radius > 0)
+    for (int j = 0; j < 6; ++j)
+      for (int k = 0; k < n8; ++k) sd_in[j][k] = sdf[j][k] * inner[k];
+  const Eigen::Matrix<double, 6, 6> H = gram(sdf, sdf, n8);
+  Eigen::Matrix<double, 6, 6> Hin = Eigen::Matrix<double, 6, 6>::Zero();  // over the inner pixels
+  if (s.inner_radius > 0) Hin = gram(sd_in, sdf, n8);
   // The part of H (and Hin) the template's own noise puts in it through its gradients, per unit of
-  // gradient noise variance (errors in variables, below): sd = (gx u0, gx u1, gy u0, gy u1, gx u2,
-  // gy u2) with u = (qx, qy, 1), so E[sd sd^T] = cov(g)(c_i, c_j) u_i u_j: the sums of u u^T suffice.
-  // Sums of qx^2, qx qy, qy^2, qx, qy, 1 over the ring (ring) and the inner pixels (in).
-  std::array<double, 6> ring{}, in{};
-  for (int dr = -rad, k = 0; dr <= rad; ++dr)
-    for (int dc = -rad; dc <= rad; ++dc, ++k) {
-      t[k] = static_cast<float>((t[k] - mean) * scale);
-      q[k] = shape ? shape[k] : Eigen::Vector2d(dc, dr);
-      qx[k] = static_cast<float>(q[k].x());
-      qy[k] = static_cast<float>(q[k].y());
-      const std::size_t p = static_cast<std::size_t>(v + dr) * src.width + u + dc;
-      const Eigen::RowVector2d g = Eigen::RowVector2d(tgx[p] * scale, tgy[p] * scale) * to_q;
-      // d W / d p at q for W(q) = (I + [p0 p1; p2 p3]) q + (p4, p5).
-      sd[k] << g.x() * q[k].x(), g.x() * q[k].y(), g.y() * q[k].x(), g.y() * q[k].y(), g.x(), g.y();
-      const double ux = q[k].x(), uy = q[k].y();
-      // With inner_radius, H = Hin + the ring's sum (one outer product per pixel either way).
-      if (s.inner_radius > 0 && std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) {
-        Hin.noalias() += sd[k] * sd[k].transpose();
-        add_moments(in, ux, uy);
-      } else {
-        H.noalias() += sd[k] * sd[k].transpose();
-        add_moments(ring, ux, uy);
-      }
+  // gradient noise variance (errors in variables, below): sd = g (x) u with u = (qx, qy, 1), so
+  // E[sd sd^T] = cov(g)(c_i, c_j) u_i u_j: the sums of u u^T suffice, over the whole window (all)
+  // and its inner pixels (in), in moment_matrix's order: qx^2, qx qy, qy^2, qx, qy, 1.
+  const auto moments = [&](const float* mask) {
+    alignas(32) float mx[kMaxN8], my[kMaxN8];
+    for (int k = 0; k < n8; ++k) {
+      mx[k] = qx[k] * mask[k];
+      my[k] = qy[k] * mask[k];
     }
-  H += Hin;
-  for (std::size_t i = 0; i < 6; ++i) ring[i] += in[i];  // the whole window
-  const Eigen::Matrix2d gq = to_q.transpose() * to_q;    // cov(g) per unit of gradient noise variance
+    const float* bx[2] = {qy, mask};
+    const float* by[1] = {mask};
+    double rx[3], ry[2], rm[1];
+    // (qx m) qx, (qx m) qy, (qx m) m = qx m for a 0/1 mask; likewise for qy and m itself.
+    lk_dots::dot_many(mx, 0.f, bx, 2, n8, rx);
+    lk_dots::dot_many(my, 0.f, by, 1, n8, ry);
+    lk_dots::dot_many(mask, 0.f, nullptr, 0, n8, rm);
+    std::array<double, 6> m{};
+    m[0] = rx[0];  // sum (qx m)^2 = sum qx^2 m
+    m[1] = rx[1];
+    m[3] = rx[2];
+    m[2] = ry[0];
+    m[4] = ry[1];
+    m[5] = rm[0];
+    return m;
+  };
+  const std::array<double, 6> all = moments(ones);
+  const std::array<double, 6> in = s.inner_radius > 0 ? moments(inner) : std::array<double, 6>{};
+  const Eigen::Matrix2d gq = to_q.transpose() * to_q;  // cov(g) per unit of gradient noise variance
   const auto noise_part = [&gq](const Eigen::Matrix3d& u) {
     static constexpr int kG[6] = {0, 0, 1, 1, 0, 1}, kU[6] = {0, 1, 0, 1, 2, 2};
     Eigen::Matrix<double, 6, 6> e;
@@ -150,19 +189,23 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       for (int j = 0; j < 6; ++j) e(i, j) = gq(kG[i], kG[j]) * u(kU[i], kU[j]);
     return e;
   };
-  const Eigen::Matrix<double, 6, 6> En = noise_part(moment_matrix(ring)),
+  const Eigen::Matrix<double, 6, 6> En = noise_part(moment_matrix(all)),
                                     En_in = noise_part(moment_matrix(in));
   SpdFactor<6> h_factor;
   if (!h_factor.factor(H)) return out;
   // The template's side of the sums below, once: sum_k sd_k, sum_k sd_k t_k, sum_k t_k (0 up to the
   // float rounding of t) and sum_k t_k^2 (1 up to it).
-  Eigen::Matrix<double, 6, 1> sd_sum = Eigen::Matrix<double, 6, 1>::Zero(), sd_t = sd_sum;
+  Eigen::Matrix<double, 6, 1> sd_sum, sd_t;
   double t_sum = 0, tt = 0;
-  for (int k = 0; k < n; ++k) {
-    sd_sum += sd[k];
-    sd_t.noalias() += sd[k] * double(t[k]);
-    t_sum += t[k];
-    tt += double(t[k]) * t[k];
+  {
+    const float* rows[7] = {sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5], t};
+    double r[8];
+    lk_dots::dot_many(ones, 0.f, rows, 7, n8, r);
+    sd_sum = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(r + 1);
+    t_sum = r[7];
+    lk_dots::dot_many(t, 0.f, rows, 6, n8, r);
+    tt = r[0];
+    sd_t = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(r + 1);
   }
   // The warp as a 3x3 matrix, template coordinates (relative to (u, v)) -> target raw pixels.
   Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
@@ -171,15 +214,17 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   else if (!shape)
     M.topLeftCorner<2, 2>() = A0;
   M.topRightCorner<2, 1>() = start;
-  std::array<float, kMaxN> wi{};
+  alignas(32) float wi[kMaxN8];
   // The warped window wi, normalised to zero mean and unit norm (w = sc (wi - m)), enters only
   // through e_k = w_k - t_k: b = sum_k sd_k e_k = sc (sum_k sd_k wi_k - m sd_sum) - sd_t and
   // SSR = sum_k e_k^2 = sc^2 var - 2 sc (sum_k wi_k t_k - m t_sum) + tt, so one pass of nine dot
-  // products over the raw samples replaces normalising them and summing the residual (three passes).
-  // Double sums of float samples: var = sum wi^2 - m sum wi cancels ~(mean / contrast)^2 ~ 1e4 of
-  // 1e-16, far below the noise.
+  // products over the samples replaces normalising them and summing the residual (three passes).
+  // Every one of these is unchanged when the samples are taken about a centre c (wi - c, m - c):
+  // the float sums of lk_dots then do not cancel (var = sum wi^2 - m sum wi about 0 would lose
+  // ~(mean / contrast)^2 ~ 1e4 of float's 6e-8). c: the last sample's mean (the template's first).
   Eigen::Matrix<double, 6, 1> grad;         // b above
-  double ssr = 0, mean_w = 0, scale_w = 0;  // the last sample's SSR, window mean and 1 / norm
+  double ssr = 0, mean_c = 0, scale_w = 0;  // the last sample's SSR, centred mean and 1 / norm
+  float centre = static_cast<float>(mean), used_centre = centre;
   auto sample = [&]() {
     const Eigen::Vector2d c = M.topRightCorner<2, 1>();
     const int ci = round_half_away(c.x()), ri = round_half_away(c.y());
@@ -188,23 +233,22 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     lk_sample::Warp w;
     for (int r = 0; r < 2; ++r)
       for (int c = 0; c < 3; ++c) w.m[3 * r + c] = static_cast<float>(M(r, c));
-    if (!lk_sample::sample_window(dst, w, qx.data(), qy.data(), n, wi.data())) return false;
-    double s1 = 0, s2 = 0, st = 0;
-    Eigen::Matrix<double, 6, 1> p = Eigen::Matrix<double, 6, 1>::Zero();
-    for (int k = 0; k < n; ++k) {
-      const double x = wi[k];
-      s1 += x;
-      s2 += x * x;
-      st += x * t[k];
-      p.noalias() += sd[k] * x;
-    }
+    if (!lk_sample::sample_window(dst, w, qx, qy, n, wi)) return false;
+    std::fill(wi + n, wi + n8, centre);  // the padding: wi - centre = 0
+    used_centre = centre;
+    const float* rows[8] = {ones, t, sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5]};
+    double r[9];
+    lk_dots::dot_many(wi, centre, rows, 8, n8, r);
+    const double s2 = r[0], s1 = r[1], st = r[2];
+    const Eigen::Map<const Eigen::Matrix<double, 6, 1>> p(r + 3);
     const double m = s1 / n, var = s2 - s1 * m;
     if (!(var > 0)) return false;
     const double sc = 1.0 / std::sqrt(var);
     grad = sc * (p - m * sd_sum) - sd_t;
     ssr = std::max(0.0, 1.0 - 2.0 * sc * (st - m * t_sum) + tt);
-    mean_w = m;
+    mean_c = m;
     scale_w = sc;
+    centre += static_cast<float>(m);
     return true;
   };
   for (int it = 0; it < s.max_iterations; ++it) {
@@ -239,7 +283,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     for (int dr = -rad, k = 0; dr <= rad; ++dr)
       for (int dc = -rad; dc <= rad; ++dc, ++k) {
         if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) continue;
-        const double e = scale_w * (wi[k] - mean_w) - t[k];
+        const double e = scale_w * (wi[k] - used_centre - mean_c) - t[k];
         outer += e * e;
       }
     out.ssr_outer_dn2 = outer * ss;
@@ -266,6 +310,11 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   // Only the translation's rows of Hs^-1 (symmetric: the solve against the last two unit vectors).
   const Eigen::Matrix<double, 2, 6> Pw = translation_rows(lds);
   // (b * SD) over the window grown by one pixel; white: B = H.
+  // The steepest-descent vectors of each pixel (the floats the sums used), for the correlated case.
+  std::array<Eigen::Matrix<double, 6, 1>, kMaxN> sd;
+  if (!white)
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < 6; ++j) sd[k](j) = sdf[j][k];
   const Eigen::Matrix<double, 6, 6> B = white ? H : kernel_outer(b, sd, side);
   const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * Pw * B * Pw.transpose();
   out.cov = out.A * cov_t * out.A.transpose();
