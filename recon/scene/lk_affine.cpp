@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "../corners/simd.hpp"
 #include "lk_dots.hpp"
 #include "lk_sample.hpp"
 #include "round.hpp"
@@ -14,28 +15,76 @@
 namespace naneye::recon::scene {
 namespace {
 
-// sum_p (b * v)_p (b * v)_p^T over the window grown by one pixel (the kernel's reach), v zero outside
-// the side x side window: the noise of a weighted sum of v under the pair's 3 x 3 noise kernel b.
-template <int D, std::size_t N>
-Eigen::Matrix<double, D, D> kernel_outer(const std::array<float, 9>& b,
-                                         const std::array<Eigen::Matrix<double, D, 1>, N>& v, int side) {
-  Eigen::Matrix<double, D, D> out = Eigen::Matrix<double, D, D>::Zero();
-  for (int r = -1; r <= side; ++r)
-    for (int c = -1; c <= side; ++c) {
-      Eigen::Matrix<double, D, 1> f = Eigen::Matrix<double, D, 1>::Zero();
-      for (int i = -1; i <= 1; ++i)
-        for (int j = -1; j <= 1; ++j) {
-          const int rr = r + i, cc = c + j;
-          if (rr < 0 || cc < 0 || rr >= side || cc >= side) continue;
-          f += double(b[static_cast<std::size_t>((i + 1) * 3 + j + 1)]) *
-               v[static_cast<std::size_t>(rr * side + cc)];
-        }
-      out.noalias() += f * f.transpose();
-    }
-  return out;
-}
 constexpr int kMaxN = 15 * 15;
 constexpr int kMaxN8 = lk_dots::padded(kMaxN);
+// The grown window's rows (side + 2 <= 17 columns) at a stride of whole 4-float vectors.
+constexpr int kMaxStride = 20, kMaxGrown8 = lk_dots::padded(17 * kMaxStride);
+
+// sum_p (b * v)_p (b * v)_p^T over the window grown by one pixel (the kernel's reach) for the
+// 2-vectors v = (x, y) per pixel of the side x side window (zero outside it): the noise of a weighted
+// sum of v under the pair's 3 x 3 noise kernel b. The callers project the steepest-descent vectors
+// onto the translation first (P B P^T = the same sum over P sd), so 2 filtered images, not 6. Float
+// 4-vectors along the rows over zero-padded copies (a covariance needs no more than float's 1e-7).
+Eigen::Matrix2d kernel_outer(const std::array<float, 9>& b, const float* x, const float* y, int side) {
+  using simd::V4;
+  const int g = side + 2, stride = (g + 3) / 4 * 4, in_stride = stride + 4;
+  // The inputs at (2, 2) of zero planes of side + 4 rows: out(r, c) = sum b(i, j) in(r + i, c + j).
+  alignas(16) float pad[2][(17 + 2) * (kMaxStride + 4)] = {};
+  for (int r = 0; r < side; ++r)
+    for (int c = 0; c < side; ++c) {
+      pad[0][(r + 2) * in_stride + c + 2] = x[r * side + c];
+      pad[1][(r + 2) * in_stride + c + 2] = y[r * side + c];
+    }
+  const int n8 = lk_dots::padded(g * stride);
+  alignas(32) float f[2][kMaxGrown8];
+  for (int e = 0; e < 2; ++e) {
+    for (int r = 0; r < g; ++r)
+      for (int c = 0; c < stride; c += 4) {  // columns >= g read only the zero padding: stay 0
+        V4 acc = V4{};
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            acc +=
+                b[static_cast<std::size_t>(i * 3 + j)] * simd::load<V4>(&pad[e][(r + i) * in_stride + c + j]);
+        simd::store(&f[e][r * stride + c], acc);
+      }
+    for (int k = g * stride; k < n8; ++k) f[e][k] = 0.f;
+  }
+  double rx[2], ry[1];
+  const float* with_y[1] = {f[1]};
+  lk_dots::dot_many(f[0], 0.f, with_y, 1, n8, rx);
+  lk_dots::dot_many(f[1], 0.f, nullptr, 0, n8, ry);
+  Eigen::Matrix2d out;
+  out << rx[0], rx[1], rx[1], ry[0];
+  return out;
+}
+
+// p = P sd per pixel (P a 2 x 6 projection) as two float arrays over whole blocks of the padded
+// window; with `inner`, P2 sd added on the inner pixels.
+void project(const Eigen::Matrix<double, 2, 6>& P, const float (&sd)[6][kMaxN8], int n8, float* px, float* py,
+             const Eigen::Matrix<double, 2, 6>* P2 = nullptr, const float* inner = nullptr) {
+  using simd::V4;
+  for (int k = 0; k < n8; k += 4) {
+    V4 a = V4{}, c = V4{};
+    for (int j = 0; j < 6; ++j) {
+      const V4 v = simd::load<V4>(&sd[j][k]);
+      a += static_cast<float>(P(0, j)) * v;
+      c += static_cast<float>(P(1, j)) * v;
+    }
+    if (P2) {
+      V4 a2 = V4{}, c2 = V4{};
+      for (int j = 0; j < 6; ++j) {
+        const V4 v = simd::load<V4>(&sd[j][k]);
+        a2 += static_cast<float>((*P2)(0, j)) * v;
+        c2 += static_cast<float>((*P2)(1, j)) * v;
+      }
+      const V4 m = simd::load<V4>(inner + k);
+      a += m * a2;
+      c += m * c2;
+    }
+    simd::store(px + k, a);
+    simd::store(py + k, c);
+  }
+}
 
 // H(i, j) = sum_k a_i[k] b_j[k] for j >= i, mirrored: the 21 distinct entries as dot products.
 // a_i is b_i itself or b_i on a subset of the pixels (0 elsewhere): then a_i b_i = a_i^2.
@@ -309,14 +358,16 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   if (!lds.factor(Hs)) return LkResult{};
   // Only the translation's rows of Hs^-1 (symmetric: the solve against the last two unit vectors).
   const Eigen::Matrix<double, 2, 6> Pw = translation_rows(lds);
-  // (b * SD) over the window grown by one pixel; white: B = H.
-  // The steepest-descent vectors of each pixel (the floats the sums used), for the correlated case.
-  std::array<Eigen::Matrix<double, 6, 1>, kMaxN> sd;
-  if (!white)
-    for (int k = 0; k < n; ++k)
-      for (int j = 0; j < 6; ++j) sd[k](j) = sdf[j][k];
-  const Eigen::Matrix<double, 6, 6> B = white ? H : kernel_outer(b, sd, side);
-  const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * Pw * B * Pw.transpose();
+  // Pw B Pw^T with B = sum over the window grown by one pixel of (b * sd)(b * sd)^T; white: B = H.
+  alignas(32) float px[kMaxN8], py[kMaxN8];
+  Eigen::Matrix2d PBP;
+  if (white) {
+    PBP = Pw * H * Pw.transpose();
+  } else {
+    project(Pw, sdf, n8, px, py);
+    PBP = kernel_outer(b, px, py, side);
+  }
+  const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * PBP;
   out.cov = out.A * cov_t * out.A.transpose();
   if (s.inner_radius > 0) {
     // Linearised, each fit's translation is a weighted sum of the residuals: H^-1 sum_k sd_k e_k, the
@@ -332,13 +383,10 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const Eigen::Matrix2d cross = Pw * Hin * Pin.transpose();
       G = Pw * H * Pw.transpose() - cross - cross.transpose() + Pin * Hin * Pin.transpose();
     } else {
-      std::array<Eigen::Vector2d, kMaxN> g;
-      for (int dr = -rad, k = 0; dr <= rad; ++dr)
-        for (int dc = -rad; dc <= rad; ++dc, ++k) {
-          g[k] = -Pw * sd[k];
-          if (std::max(std::abs(dr), std::abs(dc)) <= s.inner_radius) g[k] += Pin * sd[k];
-        }
-      G = kernel_outer(b, g, side);
+      // g_k = (Pin [k inner] - Pw) sd_k
+      const Eigen::Matrix<double, 2, 6> minus_pw = -Pw;
+      project(minus_pw, sdf, n8, px, py, &Pin, inner);
+      G = kernel_outer(b, px, py, side);
     }
     out.diff_cov_unit = out.A * (white ? G : Eigen::Matrix2d(G / b2)) * out.A.transpose();
     out.template_ss_dn2 = ss;

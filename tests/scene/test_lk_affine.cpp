@@ -1,0 +1,191 @@
+// The affine LK (recon/scene/lk_affine.hpp) on its own: its covariance against the scatter of its
+// results over many noise draws (mrcal's habit: an uncertainty is checked empirically), for white
+// noise and for the Bayer luminance's correlated noise (the sandwich over the filtered steepest-
+// descent images), on the narrow 9 x 9 window and the wide 13 x 13 one with its inner ring.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "naneye/recon/scene/lk_affine.hpp"
+
+namespace naneye::recon::scene {
+namespace {
+
+constexpr int kSize = 48;
+
+// A band-limited texture: a sum of plane waves, wavelengths 5-14 px, amplitude ~40 DN about 500.
+struct Texture {
+  std::vector<double> kx, ky, phase, amp;
+  double at(double x, double y) const {
+    double v = 500;
+    for (std::size_t i = 0; i < kx.size(); ++i) v += amp[i] * std::sin(kx[i] * x + ky[i] * y + phase[i]);
+    return v;
+  }
+};
+
+Texture make_texture(std::mt19937& rng) {
+  Texture t;
+  std::uniform_real_distribution<double> dir(0, 2 * M_PI), wave(5, 14), amp(8, 16);
+  for (int i = 0; i < 8; ++i) {
+    const double a = dir(rng), k = 2 * M_PI / wave(rng);
+    t.kx.push_back(k * std::cos(a));
+    t.ky.push_back(k * std::sin(a));
+    t.phase.push_back(dir(rng));
+    t.amp.push_back(amp(rng));
+  }
+  return t;
+}
+
+// Noise of standard deviation sigma: white, or white filtered by `kernel` (rescaled to sigma).
+std::vector<float> noise(const std::array<float, 9>& kernel, double sigma, std::mt19937& rng) {
+  std::normal_distribution<double> n(0, 1);
+  std::vector<double> w(static_cast<std::size_t>((kSize + 2) * (kSize + 2)));
+  for (double& x : w) x = n(rng);
+  double b2 = 0;
+  for (float b : kernel) b2 += double(b) * b;
+  std::vector<float> out(static_cast<std::size_t>(kSize * kSize));
+  for (int r = 0; r < kSize; ++r)
+    for (int c = 0; c < kSize; ++c) {
+      double s = 0;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          s += kernel[static_cast<std::size_t>(i * 3 + j)] *
+               w[static_cast<std::size_t>((r + i) * (kSize + 2) + c + j)];
+      out[static_cast<std::size_t>(r * kSize + c)] = static_cast<float>(sigma * s / std::sqrt(b2));
+    }
+  return out;
+}
+
+struct Scatter {
+  double predicted = 0, measured = 0;  // trace of the covariance, px^2
+  int converged = 0;
+  Eigen::Vector2d bias{0, 0};  // mean result less the truth, px
+};
+
+// refine_affine `draws` times on fresh noise of sd noise_dn (both eyes): target = the texture moved
+// by `shift`.
+Scatter scatter(const LkSettings& s, int draws, unsigned seed, double noise_dn = 2.0,
+                const Eigen::Vector2d& shift = Eigen::Vector2d(3.3, -1.7)) {
+  std::mt19937 rng(seed);
+  const Texture tex = make_texture(rng);
+  const int u = kSize / 2, v = kSize / 2;
+  std::vector<float> left(kSize * kSize), right(kSize * kSize), gx(kSize * kSize), gy(kSize * kSize);
+  const std::vector<std::uint8_t> usable(kSize * kSize, 1);
+  std::vector<Eigen::Vector2d> px;
+  Eigen::Matrix2d cov_sum = Eigen::Matrix2d::Zero();
+  Scatter out;
+  for (int d = 0; d < draws; ++d) {
+    const std::vector<float> nl = noise(s.noise_kernel, noise_dn, rng),
+                             nr = noise(s.noise_kernel, noise_dn, rng);
+    for (int r = 0; r < kSize; ++r)
+      for (int c = 0; c < kSize; ++c) {
+        const std::size_t i = static_cast<std::size_t>(r * kSize + c);
+        left[i] = static_cast<float>(tex.at(c, r)) + nl[i];
+        right[i] = static_cast<float>(tex.at(c - shift.x(), r - shift.y())) + nr[i];
+      }
+    for (int r = 1; r < kSize - 1; ++r)
+      for (int c = 1; c < kSize - 1; ++c) {
+        const std::size_t i = static_cast<std::size_t>(r * kSize + c);
+        gx[i] = 0.5f * (left[i + 1] - left[i - 1]);
+        gy[i] = 0.5f * (left[i + kSize] - left[i - kSize]);
+      }
+    const GrayView L{left.data(), kSize, kSize}, R{right.data(), kSize, kSize};
+    const Eigen::Vector2d start = Eigen::Vector2d(u, v) + shift + Eigen::Vector2d(0.4, -0.3);
+    const LkResult res = refine_affine(L, gx.data(), gy.data(), u, v, R, usable.data(), start,
+                                       Eigen::Matrix2d::Identity(), nullptr, s);
+    if (!res.converged) continue;
+    ++out.converged;
+    px.push_back(res.px);
+    cov_sum += res.cov;
+  }
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : px) mean += p;
+  mean /= static_cast<double>(px.size());
+  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();
+  for (const auto& p : px) c += (p - mean) * (p - mean).transpose();
+  c /= std::max(1.0, static_cast<double>(px.size()) - 1);
+  out.measured = c.trace();
+  out.predicted = cov_sum.trace() / static_cast<double>(px.size());
+  out.bias = mean - Eigen::Vector2d(u, v) - shift;
+  return out;
+}
+
+void expect_honest(const char* name, const LkSettings& s) {
+  const int draws = 400;
+  const Scatter sc = scatter(s, draws, 11);
+  const double ratio = sc.measured / sc.predicted;
+  std::printf(
+      "%-26s converged %d / %d  predicted sd %.4f px  measured sd %.4f px  ratio of variances %.3f  bias "
+      "%.4f px\n",
+      name, sc.converged, draws, std::sqrt(sc.predicted), std::sqrt(sc.measured), ratio, sc.bias.norm());
+  EXPECT_GE(sc.converged, draws * 99 / 100) << name;
+  // 400 draws: the measured variance's own spread is ~7 % (sqrt(2 / 400)); 0.75-1.33 is the sd within
+  // about +-15 %. (Measured 2026-12-06: 0.94 / 0.96 white, 1.23 / 1.00 binomial; with the white
+  // formula the binomial 13 x 13 would claim half the sd it has.) The bias is the next test's.
+  EXPECT_GT(ratio, 0.75) << name;
+  EXPECT_LT(ratio, 1.33) << name;
+}
+
+TEST(LkAffine, CovarianceHoldsForWhiteNoise) {
+  LkSettings s;
+  expect_honest("white 9x9", s);
+  s.radius = 6;
+  s.inner_radius = 4;
+  expect_honest("white 13x13 (inner 9x9)", s);
+}
+
+TEST(LkAffine, CovarianceHoldsForTheBayerLuminancesCorrelatedNoise) {
+  LkSettings s;
+  s.noise_kernel = LkSettings::binomial3();
+  expect_honest("binomial 9x9", s);
+  s.radius = 6;
+  s.inner_radius = 4;
+  expect_honest("binomial 13x13 (inner 9x9)", s);
+  // The same fits with the white-noise formula: the correlation must be what moves the sigma.
+  LkSettings w = s;
+  w.noise_kernel = LkSettings{}.noise_kernel;
+  const Scatter naive = scatter(w, 100, 11);
+  std::printf("white formula on correlated noise would predict sd %.4f px\n", std::sqrt(naive.predicted));
+}
+
+// Without noise the result should be the shift itself. It is not, by up to ~0.018 px: Keys' cubic
+// (the target's interpolation) is exact at whole pixels only; elsewhere its phase error (zero at 1/2,
+// where the kernel is symmetric) and its attenuation bias the match by an amount that depends on the
+// fractional position, opposite on either side of 1/2: "pixel locking", a bias every match at that
+// fractional disparity shares (0.01 px is ~0.1 % of depth at a 10 px disparity). The Gauss-Newton's
+// unfinished last step (stop_step_px) adds ~0.004 px; with a tight stop the bias at whole pixels is
+// 0. Measured 2026-12-06 on this texture (wavelengths 5-14 px): max |bias| 0.018 px (9 x 9), 0.014 px
+// (13 x 13). Not corrected yet (docs/scene.md, "What remains"): these bounds catch a worse one.
+TEST(LkAffine, NoiseFreeBiasIsTheInterpolationsPixelLocking) {
+  LkSettings narrow, wide;
+  wide.radius = 6;
+  wide.inner_radius = 4;
+  for (const LkSettings* base : {&narrow, &wide}) {
+    LkSettings tight = *base;
+    tight.stop_step_px = 1e-5;
+    double worst = 0, worst_tight = 0, at_whole = 0;
+    for (int eighth = 0; eighth < 8; ++eighth) {
+      const double f = eighth / 8.0;
+      const Eigen::Vector2d shift(3 + f, -1 - f);
+      const Scatter b = scatter(*base, 1, 11, 0.0, shift), t = scatter(tight, 1, 11, 0.0, shift);
+      ASSERT_EQ(b.converged, 1);
+      ASSERT_EQ(t.converged, 1);
+      std::printf("radius %d  fraction %.3f  bias (%+.4f, %+.4f) px  tight stop (%+.4f, %+.4f) px\n",
+                  base->radius, f, b.bias.x(), b.bias.y(), t.bias.x(), t.bias.y());
+      worst = std::max(worst, b.bias.norm());
+      worst_tight = std::max(worst_tight, t.bias.norm());
+      if (eighth == 0) at_whole = t.bias.norm();
+    }
+    EXPECT_LT(worst, 0.025) << base->radius;
+    EXPECT_LT(worst_tight, 0.025) << base->radius;
+    // At whole pixels Keys' cubic reproduces the samples: with a tight stop no bias.
+    EXPECT_LT(at_whole, 1e-3) << base->radius;
+  }
+}
+
+}  // namespace
+}  // namespace naneye::recon::scene
