@@ -59,27 +59,16 @@ Eigen::Matrix2d kernel_outer(const std::array<float, 9>& b, const float* x, cons
 }
 
 // p = P sd per pixel (P a 2 x 6 projection) as two float arrays over whole blocks of the padded
-// window; with `inner`, P2 sd added on the inner pixels.
+// window, written or (accumulate) added to px, py.
 void project(const Eigen::Matrix<double, 2, 6>& P, const float (&sd)[6][kMaxN8], int n8, float* px, float* py,
-             const Eigen::Matrix<double, 2, 6>* P2 = nullptr, const float* inner = nullptr) {
+             bool accumulate = false) {
   using simd::V4;
   for (int k = 0; k < n8; k += 4) {
-    V4 a = V4{}, c = V4{};
+    V4 a = accumulate ? simd::load<V4>(px + k) : V4{}, c = accumulate ? simd::load<V4>(py + k) : V4{};
     for (int j = 0; j < 6; ++j) {
       const V4 v = simd::load<V4>(&sd[j][k]);
       a += static_cast<float>(P(0, j)) * v;
       c += static_cast<float>(P(1, j)) * v;
-    }
-    if (P2) {
-      V4 a2 = V4{}, c2 = V4{};
-      for (int j = 0; j < 6; ++j) {
-        const V4 v = simd::load<V4>(&sd[j][k]);
-        a2 += static_cast<float>((*P2)(0, j)) * v;
-        c2 += static_cast<float>((*P2)(1, j)) * v;
-      }
-      const V4 m = simd::load<V4>(inner + k);
-      a += m * a2;
-      c += m * c2;
     }
     simd::store(px + k, a);
     simd::store(py + k, c);
@@ -383,9 +372,9 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
       const Eigen::Matrix2d cross = Pw * Hin * Pin.transpose();
       G = Pw * H * Pw.transpose() - cross - cross.transpose() + Pin * Hin * Pin.transpose();
     } else {
-      // g_k = (Pin [k inner] - Pw) sd_k
-      const Eigen::Matrix<double, 2, 6> minus_pw = -Pw;
-      project(minus_pw, sdf, n8, px, py, &Pin, inner);
+      // g_k = (Pin [k inner] - Pw) sd_k: -Pw over the window, Pin over sd_in (sd on the inner pixels).
+      project(-Pw, sdf, n8, px, py);
+      project(Pin, sd_in, n8, px, py, true);
       G = kernel_outer(b, px, py, side);
     }
     out.diff_cov_unit = out.A * (white ? G : Eigen::Matrix2d(G / b2)) * out.A.transpose();

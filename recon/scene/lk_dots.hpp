@@ -19,8 +19,6 @@ constexpr int padded(int n) {
   return (n + kBlock - 1) / kBlock * kBlock;
 }
 
-bool avx2_available();
-
 // out[0] = sum_{k < n8} (a[k] - c)^2, out[1 + j] = sum_{k < n8} (a[k] - c) b[j][k], j < m
 // (m <= kMaxArrays); n8 a multiple of kBlock, the arrays zero (a: c) beyond the data. The centre is
 // a float subtraction, exact for c = 0.
