@@ -6,7 +6,7 @@
 
 #include "../corners/simd.hpp"
 #include "interpolate.hpp"
-#include "keys_simd.hpp"
+#include "cubic_simd.hpp"
 
 namespace naneye::recon::scene::resample {
 namespace {

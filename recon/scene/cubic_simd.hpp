@@ -1,8 +1,9 @@
 #pragma once
-// Keys' cubic convolution (interpolate.hpp's keys_weights and cubic_from_taps) on whole vectors: the
-// same expressions in the same order, so every width gives the scalar results to the bit (no fused
-// multiply-add: the AVX2 functions are compiled for "avx2" alone, and ISO C++ mode does not contract).
-// Shared by the LK's sampling (lk_sample.cpp) and the dense path's rectification (resample_kernels.cpp).
+// The cubic kernels of interpolate.hpp (Keys' convolution and the cubic B-spline's weights, and
+// cubic_from_taps) on whole vectors: the same expressions in the same order, so every width gives the scalar
+// results to the bit (no fused multiply-add: the AVX2 functions are compiled for "avx2" alone, and ISO C++
+// mode does not contract). The LK's sampling (lk_sample.cpp) uses the B-spline, the dense path's
+// rectification (resample_kernels.cpp) Keys.
 #include <immintrin.h>
 
 #include "../corners/simd.hpp"
@@ -32,6 +33,30 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void keys8(__m256 t, __m256* 
       _mm256_mul_ps(_mm256_set1_ps(0.5f), t));
   k[3] = _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), t3), _mm256_mul_ps(_mm256_set1_ps(0.5f), t2));
 }
+// bspline_weights() per lane.
+template <class V>
+NANEYE_SIMD_INLINE void bspline_v(V t, V w[4]) {
+  const V t2 = t * t, t3 = t2 * t, s = (V{} + 1.0f) - t;
+  w[0] = (V{} + 1.0f / 6.0f) * (s * s * s);
+  w[1] = (V{} + 0.5f) * t3 - t2 + (V{} + 2.0f / 3.0f);
+  w[2] = (V{} + -0.5f) * t3 + (V{} + 0.5f) * t2 + (V{} + 0.5f) * t + (V{} + 1.0f / 6.0f);
+  w[3] = (V{} + 1.0f / 6.0f) * t3;
+}
+
+// bspline_weights() in AVX2.
+__attribute__((target("avx2"))) NANEYE_SIMD_INLINE void bspline8(__m256 t, __m256* k) {
+  const __m256 t2 = _mm256_mul_ps(t, t), t3 = _mm256_mul_ps(t2, t),
+               s = _mm256_sub_ps(_mm256_set1_ps(1.0f), t);
+  const __m256 sixth = _mm256_set1_ps(1.0f / 6.0f), half = _mm256_set1_ps(0.5f);
+  k[0] = _mm256_mul_ps(sixth, _mm256_mul_ps(_mm256_mul_ps(s, s), s));
+  k[1] = _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(half, t3), t2), _mm256_set1_ps(2.0f / 3.0f));
+  k[2] = _mm256_add_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(-0.5f), t3), _mm256_mul_ps(half, t2)),
+                    _mm256_mul_ps(half, t)),
+      sixth);
+  k[3] = _mm256_mul_ps(sixth, t3);
+}
+
 // base[idx] per lane.
 template <class V, class I>
 NANEYE_SIMD_INLINE void gather(const float* base, const I& idx, V& v) {

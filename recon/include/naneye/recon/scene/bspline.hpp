@@ -1,0 +1,28 @@
+#pragma once
+// Cubic B-spline interpolation's coefficients (Unser, "Splines: a perfect fit for signal and image
+// processing", IEEE Signal Processing Magazine 16(6), 1999, Box 2; Unser, Aldroubi & Eden, IEEE TSP
+// 41(2), 1993). The sub-pixel matcher samples the target image between pixels; Keys' cubic there
+// biases every match towards whole pixels by up to ~0.02 px on this camera's texture ("pixel
+// locking", tests/scene/test_lk_affine.cpp), ~0.2 % of depth at 10 px of disparity. The cubic
+// B-spline over these coefficients interpolates the same samples with a far flatter response
+// (its error at a quarter of the sampling rate is ~10x smaller), for one recursive filter pass per
+// row and column per frame.
+#include "naneye/recon/scene/features.hpp"
+
+namespace naneye::recon::scene {
+
+// The rectangle of an image that carries data (RawImageView's ignored padding column and edge rows
+// are outside it): columns [0, cols), rows [row_begin, row_end).
+struct ActiveRect {
+  int cols = 0, row_begin = 0, row_end = 0;
+};
+
+// out (in.width x in.height, not aliasing in) = the coefficients c with sum_k c[k] beta3(x - k) = in
+// at every pixel of `active`, the image continued beyond the rectangle's edges as its mirror image
+// (whole-sample symmetric, the usual boundary: no step at the edge). Outside the rectangle `out`
+// holds the mirrored coefficients, so a 4 x 4 tap set reaching over the edge reads that same
+// continuation, never the padding. The rectangle must be at least 17 x 17 (std::invalid_argument
+// otherwise). `scratch`: room for the rectangle's floats.
+void bspline_coefficients(const GrayView& in, const ActiveRect& active, float* out, float* scratch);
+
+}  // namespace naneye::recon::scene
