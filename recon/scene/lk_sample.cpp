@@ -6,8 +6,8 @@
 #include <immintrin.h>
 
 #include "../corners/simd.hpp"
+#include "cubic_simd.hpp"
 #include "interpolate.hpp"
-#include "keys_simd.hpp"
 
 namespace naneye::recon::scene::lk_sample {
 namespace {
@@ -25,7 +25,7 @@ bool sample_plain(const GrayView& g, const Warp& w, const float* qx, const float
   for (int k = k0; k < n; ++k) {
     const float x = w.m[0] * qx[k] + w.m[1] * qy[k] + w.m[2], y = w.m[3] * qx[k] + w.m[4] * qy[k] + w.m[5];
     if (!(x >= 1 && y >= 1 && x < g.width - 3 && y < g.height - 3)) return false;
-    out[k] = sample_cubic(g, x, y);
+    out[k] = sample_bspline(g, x, y);
   }
   return true;
 }
@@ -49,8 +49,8 @@ NANEYE_SIMD_INLINE bool sample_v(const GrayView& g, const Warp& w, const float* 
       if (!inside[l]) return false;
     const I c = __builtin_convertvector(x, I), r = __builtin_convertvector(y, I);
     V wx[4], wy[4];
-    keys_v<V>(x - __builtin_convertvector(c, V), wx);
-    keys_v<V>(y - __builtin_convertvector(r, V), wy);
+    bspline_v<V>(x - __builtin_convertvector(c, V), wx);
+    bspline_v<V>(y - __builtin_convertvector(r, V), wy);
     const I idx = (r - 1) * (I{} + g.width) + (c - 1);
     store(out + k, cubic_from_taps_v<V>(g.data, idx, g.width, wx, wy));
   }
@@ -81,8 +81,8 @@ __attribute__((target("avx2"))) bool sample_avx2(const GrayView& g, const Warp& 
     if (_mm256_movemask_ps(inside) != 0xff) return false;
     const __m256i c = _mm256_cvttps_epi32(x), r = _mm256_cvttps_epi32(y);
     __m256 wx[4], wy[4];
-    keys8(_mm256_sub_ps(x, _mm256_cvtepi32_ps(c)), wx);
-    keys8(_mm256_sub_ps(y, _mm256_cvtepi32_ps(r)), wy);
+    bspline8(_mm256_sub_ps(x, _mm256_cvtepi32_ps(c)), wx);
+    bspline8(_mm256_sub_ps(y, _mm256_cvtepi32_ps(r)), wy);
     const __m256i idx =
         _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(r, one), width), _mm256_sub_epi32(c, one));
     _mm256_storeu_ps(out + k, cubic_from_taps8(g.data, idx, g.width, wx, wy));

@@ -9,6 +9,7 @@
 #include "naneye/base/enum_table.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
+#include "naneye/recon/scene/bspline.hpp"
 #include "round.hpp"
 
 namespace naneye::recon::scene {
@@ -116,6 +117,7 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.left.assign(np, 0.f);
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
+  luma_.right_spline.assign(np, 0.f);
   final_ssr_quantile_ = -1;  // final_noise_false_reject 0: the ZNCC alone decides
   if (s_.final_noise_false_reject > 0) {
     const int side = 2 * s_.lk.radius + 1;
@@ -145,6 +147,10 @@ void SparseReconstructor::load_luma(const RawImageView& left, const RawImageView
   raw_to_luminance(right, luma_.right.data(), luma_.scratch.data(), kDefectThresholdDn, 0, -1, nullptr,
                    kTextured);
   luma_.bayer = left.layout == PixelLayout::bayer_grbg;
+  bspline_coefficients(
+      luma_.right_view(),
+      {right.width - right.ignore_last_cols, right.ignore_edge_rows, right.height - right.ignore_edge_rows},
+      luma_.right_spline.data(), luma_.scratch.data());
   luma_.search_filtered = s_.search_binomial && !luma_.bayer;
   if (luma_.search_filtered) {
     binomial_3x3(luma_.left.data(), luma_.left_search.data(), luma_.width, luma_.height, 0, luma_.height);
@@ -244,8 +250,8 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   predict_shape(f, xl, m.w, s_.lk.radius, -1, shape_.data());
   LkSettings lks = s_.lk;
   if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
-  const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, R, usable_[1].data(),
-                                        m.px, A0, shape_.data(), lks);
+  const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
+                                        usable_[1].data(), m.px, A0, shape_.data(), lks);
   const bool noise_left = narrow.ssr_dn2 <= final_ssr_quantile_ * 2 * noise_sigma_dn * noise_sigma_dn;
   if (!narrow.converged || (narrow.zncc < s_.min_final_zncc && !noise_left)) {
     p.status = PointStatus::refinement_failed;

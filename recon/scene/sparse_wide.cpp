@@ -82,7 +82,7 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, co
   wl.radius = rw;
   wl.inner_radius = rn;
   const LkResult wide =
-      refine_affine(luma.left_view(), detector_.gx(), detector_.gy(), f.u, f.v, luma.right_view(),
+      refine_affine(luma.left_view(), detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
                     usable_wide_[1].data(), narrow.px, A0, shape_wide_.data(), wl, &narrow.A);
   if (!wide.converged || wide.zncc < s_.min_final_zncc || !(narrow.ssr_dn2 > 0)) return {};
   const double nn = sn * sn, nw = sw * sw, e_ring = (nw - nn) * (nw - 8) / nw, dof_n = nn - 8;

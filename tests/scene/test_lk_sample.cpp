@@ -50,10 +50,10 @@ TEST(LkSample, EveryWidthGivesThePlainLoopsBits) {
       lk_sample::Warp w{{1 + jitter(rng), jitter(rng), shift(rng), jitter(rng), 1 + jitter(rng), shift(rng)}};
       std::vector<float> ref(n), got(n);
       ASSERT_TRUE(lk_sample::sample_window_lanes(1, im.view, w, qx.data(), qy.data(), n, ref.data()));
-      // The plain loop is Keys' cubic at the float positions (interpolate.hpp).
+      // The plain loop is the cubic B-spline at the float positions (interpolate.hpp).
       const float x0 = w.m[0] * qx[0] + w.m[1] * qy[0] + w.m[2],
                   y0 = w.m[3] * qx[0] + w.m[4] * qy[0] + w.m[5];
-      EXPECT_EQ(ref[0], sample_cubic(im.view, x0, y0));
+      EXPECT_EQ(ref[0], sample_bspline(im.view, x0, y0));
       for (int lanes : widths()) {
         std::fill(got.begin(), got.end(), -1.f);
         ASSERT_TRUE(lk_sample::sample_window_lanes(lanes, im.view, w, qx.data(), qy.data(), n, got.data()));

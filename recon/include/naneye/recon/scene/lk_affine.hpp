@@ -54,14 +54,15 @@ struct LkResult {
 // 3.78 for the Bayer binomial).
 double noise_dof_factor(const std::array<float, 9>& kernel);
 
-// `tgx`, `tgy`: central-difference gradients of `src`. `dst_usable`: non-zero where a window of
-// radius + 1 around the pixel lies inside the target's domain; the warp must keep its centre there.
-// The warp is affine in q: without `shape`, q = the template offset (dc, dr) and the start is
-// A0 q + start; with `shape` (one entry per template pixel, row-major), q = the pixel's predicted
-// place in the target relative to the centre (the exact model's map at the coarse depth, which an
-// affine in raw pixels cannot follow near the image edges), the start is q + start and A0 is that
-// map's Jacobian at the centre. `start_linear`: the warp's linear part to start from (another
-// refinement's A, e.g. a narrower window's) instead of A0 (without `shape`) or I (with it).
+// `tgx`, `tgy`: central-difference gradients of `src`. `dst`: the target's cubic B-spline
+// coefficients (bspline_coefficients), which the warped window samples. `dst_usable`: non-zero where a window
+// of radius + 1 around the pixel lies inside the target's domain; the warp must keep its centre there. The
+// warp is affine in q: without `shape`, q = the template offset (dc, dr) and the start is A0 q + start; with
+// `shape` (one entry per template pixel, row-major), q = the pixel's predicted place in the target relative
+// to the centre (the exact model's map at the coarse depth, which an affine in raw pixels cannot follow near
+// the image edges), the start is q + start and A0 is that map's Jacobian at the centre. `start_linear`: the
+// warp's linear part to start from (another refinement's A, e.g. a narrower window's) instead of A0 (without
+// `shape`) or I (with it).
 LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, int u, int v,
                        const GrayView& dst, const std::uint8_t* dst_usable, const Eigen::Vector2d& start,
                        const Eigen::Matrix2d& A0, const Eigen::Vector2d* shape, const LkSettings& s,

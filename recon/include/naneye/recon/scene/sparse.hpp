@@ -115,11 +115,14 @@ struct StereoLuma {
   // The coarse search's images (SparseSettings::search_binomial): the luminance through the 3x3
   // binomial when `search_filtered`, else unused (the search reads the luminance itself).
   std::vector<float> left_search, right_search;
+  // The right luminance's cubic B-spline coefficients (bspline.hpp): the sub-pixel matcher's target.
+  std::vector<float> right_spline;
   int width = 0, height = 0;
   bool bayer = false;  // filtered from a GRBG mosaic: neighbouring pixels share noise
   bool search_filtered = false;
   GrayView left_view() const { return {left.data(), width, height}; }
   GrayView right_view() const { return {right.data(), width, height}; }
+  GrayView right_spline_view() const { return {right_spline.data(), width, height}; }
   GrayView left_search_view() const { return {(search_filtered ? left_search : left).data(), width, height}; }
   GrayView right_search_view() const {
     return {(search_filtered ? right_search : right).data(), width, height};
