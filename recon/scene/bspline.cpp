@@ -16,8 +16,9 @@ namespace naneye::recon::scene {
 namespace {
 
 constexpr float kPole = -0.267949192431122706f;  // sqrt(3) - 2
-// Each pass's gain is 6; both passes' gains are applied once, to the samples as they are copied in.
-constexpr float kGain2 = 36.0f;
+// Each pass's gain (the 2-D prefilter applies both passes' at once, to the samples as they are
+// copied in).
+constexpr float kGain = 6.0f, kGain2 = kGain * kGain;
 // The anti-causal start's factor, z1 / (z1^2 - 1).
 constexpr float kEnd = kPole / (kPole * kPole - 1.0f);
 // Terms of the causal start's sum: |z1|^16 = 7e-10, below float's resolution of the sum.
@@ -83,6 +84,17 @@ void transpose(const float* src, std::ptrdiff_t src_stride, float* dst, std::ptr
 }
 
 }  // namespace
+
+void bspline_coefficients_line(const float* in, int n, float* out) {
+  if (n < 2) throw std::invalid_argument("bspline_coefficients_line: a line needs 2 samples");
+  // The causal start reads the input before out[0] is written (they may alias).
+  float acc = 0, zk = 1;
+  for (int k = 0; k < kHorizon; ++k, zk *= kPole) acc += zk * in[mirror(k, n)];
+  out[0] = kGain * acc;
+  for (int k = 1; k < n; ++k) out[k] = kGain * in[k] + kPole * out[k - 1];
+  out[n - 1] = kEnd * (out[n - 1] + kPole * out[n - 2]);
+  for (int k = n - 2; k >= 0; --k) out[k] = kPole * (out[k + 1] - out[k]);
+}
 
 void bspline_coefficients(const GrayView& in, const ActiveRect& a, float* out, float* scratch) {
   const int w = in.width, h = in.height, rows = a.row_end - a.row_begin;

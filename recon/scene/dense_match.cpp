@@ -6,6 +6,7 @@
 
 #include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
+#include "naneye/recon/scene/bspline.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "round.hpp"
 #include "select.hpp"
@@ -61,6 +62,7 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   features_.assign(2 * n, 0.f);
   bin_.assign(n, 0);
   taps_ok_.assign(n, 0);
+  right_spline_.assign(n, 0.f);
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;
@@ -69,6 +71,7 @@ void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv
                              const cv::Mat& valid_right) {
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
   update_spans(valid_left);
+  spline_rows(right, valid_right);
   integer_stage(left, right);
   match_at(r_, left, right, valid_left, valid_right);
   if (s_.max_radius > s_.radius) choose_radius(left, right, valid_left, valid_right);
@@ -123,6 +126,27 @@ void RectifiedMatcher::swap_result(Result& r) {
   std::swap(residual_sigma_, r.residual_sigma);
   std::swap(kappa_, r.kappa);
   std::swap(marginal_, r.marginal);
+}
+
+// The sub-pixel step's target (gather): every run of valid right pixels on its own, so that nothing
+// beyond the valid mask (the fold, the band's empty columns) reaches a coefficient.
+void RectifiedMatcher::spline_rows(const cv::Mat& right, const cv::Mat& valid_right) {
+  for (int y = 0; y < h_; ++y) {
+    const float* r = right.ptr<float>(y);
+    const std::uint8_t* v = valid_right.ptr<std::uint8_t>(y);
+    float* out = right_spline_.data() + static_cast<std::size_t>(y) * w_;
+    std::copy_n(r, w_, out);  // invalid pixels: never a tap of a valid sample (taps_ok_)
+    for (int x = 0; x < w_;) {
+      if (!v[x]) {
+        ++x;
+        continue;
+      }
+      int end = x;
+      while (end < w_ && v[end]) ++end;
+      if (end - x >= 2) bspline_coefficients_line(r + x, end - x, out + x);
+      x = end;
+    }
+  }
 }
 
 void RectifiedMatcher::update_spans(const cv::Mat& valid_left) {

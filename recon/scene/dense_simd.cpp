@@ -247,18 +247,19 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRo
   _mm256_store_ps(p.M, _mm256_and_ps(mask, _mm256_set1_ps(1.f)));
 }
 
-// The Keys weights and the ten products of a block of L picked pixels on whole vectors, with the
+// The cubic B-spline's weights and the ten products of a block of L picked pixels on whole vectors, with the
 // scalar code's expressions term by term; stored to the row's channels at x (count lanes).
 template <class V>
 NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, const Taps& p, int x, int count) {
   constexpr int L = kLanes<V>;
-  // Keys' cubic convolution (a = -0.5; Keys 1981, Eq. 15) and its derivative at offset t in [0, 1)
-  // from tap 0, for taps -1, 0, 1, 2.
+  // The cubic B-spline (the row holds its coefficients: bspline.hpp) and its derivative at offset t
+  // in [0, 1) from tap 0, for taps -1, 0, 1, 2.
   const V t = load<V>(p.T), t2 = t * t, t3 = t2 * t;
-  const V w0 = -0.5f * t3 + t2 - 0.5f * t, w1 = 1.5f * t3 - 2.5f * t2 + 1.f;
-  const V w2 = -1.5f * t3 + 2.f * t2 + 0.5f * t, w3 = 0.5f * t3 - 0.5f * t2;
-  const V dw0 = -1.5f * t2 + 2.f * t - 0.5f, dw1 = 4.5f * t2 - 5.f * t;
-  const V dw2 = -4.5f * t2 + 4.f * t + 0.5f, dw3 = 1.5f * t2 - t;
+  const V s = 1.f - t;
+  const V w0 = (1.f / 6.f) * (s * s * s), w1 = 0.5f * t3 - t2 + 2.f / 3.f;
+  const V w2 = -0.5f * t3 + 0.5f * t2 + 0.5f * t + 1.f / 6.f, w3 = (1.f / 6.f) * t3;
+  const V dw0 = -0.5f * (s * s), dw1 = 1.5f * t2 - 2.f * t;
+  const V dw2 = -1.5f * t2 + t + 0.5f, dw3 = 0.5f * t2;
   const V r0 = load<V>(p.R[0]), r1 = load<V>(p.R[1]), r2 = load<V>(p.R[2]), r3 = load<V>(p.R[3]);
   V W = V{}, G = V{};
   W += w0 * r0;

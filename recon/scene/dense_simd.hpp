@@ -38,13 +38,13 @@ void filter_lags(bool avx2, const float* z, float* out, const float* rho, int la
 // double in the pixels' order (the plain loop's bits). e: w x h.
 void lag_products(bool avx2, const float* e, int w, int h, double acc[49]);
 
-// One rectified row of the sub-pixel step's per-pixel products (RectifiedMatcher::gather): the right
-// row sampled at x - d by Keys' cubic (W) and its derivative (G), the left pixel (l), all less mu,
-// and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1 where every tap lies inside the
+// One rectified row of the sub-pixel step's per-pixel products (RectifiedMatcher::gather): the cubic
+// B-spline over the right row's coefficients at x - d (W) and its derivative (G), the left pixel (l),
+// all less mu, and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1 where every tap lies inside the
 // right's valid domain, else all zero).
 struct GatherRow {
   const float* left;   // left row
-  const float* right;  // right row
+  const float* right;  // right row's B-spline coefficients (bspline_coefficients_line per valid run)
   // taps_ok[i]: right pixels i - 1 .. i + 2 all valid (only read for 1 <= i < w - 2)
   const std::uint8_t* taps_ok;
   const float* d;  // the row's reference disparities (NaN: none)

@@ -22,7 +22,7 @@ namespace naneye::recon::scene {
 namespace {
 using dense_simd::Spans;
 constexpr int kChannels = 10;  // m, W, L, G, WW, GG, WG, WL, GL, LL
-// px; the residual autocorrelation's reach: the window radius (noise correlated by Keys' 4 taps and
+// px; the residual autocorrelation's reach: the window radius (noise correlated by the spline's 4 taps and
 // a Bayer filter reaches 2 px; the resampling's misfit follows the texture, further).
 constexpr int kLag = 3;
 
@@ -44,7 +44,7 @@ void each4(const Spans& sp, F&& f) {
 
 }  // namespace
 
-void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat&, bool last) {
+void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat&, const cv::Mat&, bool last) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   float* ch = chan_.data();
   dense_simd::GatherRow g{};
@@ -53,7 +53,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat& right, const c
   for (int y = 0; y < h_; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * w_;
     g.left = left.ptr<float>(y);
-    g.right = right.ptr<float>(y);
+    g.right = right_spline_.data() + row;
     g.taps_ok = taps_ok_.data() + row;
     g.d = d_.data() + row;
     for (int k = 0; k < kChannels; ++k) g.ch[k] = ch + static_cast<std::size_t>(k) * n + row;

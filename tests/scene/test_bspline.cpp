@@ -73,6 +73,32 @@ TEST(BSpline, ConstantAndMirroredContinuation) {
   }
 }
 
+// One line (the dense step's rows): the coefficients reproduce every sample through the B-spline's
+// taps (c[k-1] + 4 c[k] + c[k+1]) / 6, the ends through the mirrored coefficients, for any length
+// from 2 (shorter than the causal start's 16 terms: the mirror folds many times); in place gives the
+// same bits.
+TEST(BSpline, LineInterpolatesEverySampleAtAnyLengthAndInPlace) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> level(0.f, 1023.f);
+  for (int n : {2, 3, 5, 16, 17, 40}) {
+    std::vector<float> s(static_cast<std::size_t>(n)), c(s.size());
+    for (float& v : s) v = level(rng);
+    bspline_coefficients_line(s.data(), n, c.data());
+    std::vector<float> in_place = s;
+    bspline_coefficients_line(in_place.data(), n, in_place.data());
+    EXPECT_EQ(c, in_place) << n;
+    const auto at = [&](int k) {
+      return double(c[static_cast<std::size_t>(k < 0 ? -k : k >= n ? 2 * n - 2 - k : k)]);
+    };
+    double worst = 0;
+    for (int k = 0; k < n; ++k)
+      worst = std::max(worst, std::abs((at(k - 1) + 4 * at(k) + at(k + 1)) / 6 - s[k]));
+    EXPECT_LT(worst, 2e-3) << n;
+  }
+  float one_sample[1] = {5.f};
+  EXPECT_THROW(bspline_coefficients_line(one_sample, 1, one_sample), std::invalid_argument);
+}
+
 TEST(BSpline, RefusesARectangleTooSmallForItsStart) {
   std::vector<float> im(static_cast<std::size_t>(kW * kH), 1.f), c(im.size()), scratch(im.size());
   // The causal start sums 16 terms of the rectangle's own rows and columns.

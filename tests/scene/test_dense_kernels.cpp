@@ -138,11 +138,11 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
         const float xs = static_cast<float>(x) - d[x];
         const int i0 = static_cast<int>(std::floor(xs));
         if (i0 >= 1 && i0 + 2 < w && ok[i0]) {
-          const float t = xs - static_cast<float>(i0), t2 = t * t, t3 = t2 * t;
-          const float wk[4] = {-0.5f * t3 + t2 - 0.5f * t, 1.5f * t3 - 2.5f * t2 + 1,
-                               -1.5f * t3 + 2 * t2 + 0.5f * t, 0.5f * t3 - 0.5f * t2};
-          const float dk[4] = {-1.5f * t2 + 2 * t - 0.5f, 4.5f * t2 - 5 * t, -4.5f * t2 + 4 * t + 0.5f,
-                               1.5f * t2 - t};
+          // The cubic B-spline's weights and their derivatives (the row holds its coefficients).
+          const float t = xs - static_cast<float>(i0), t2 = t * t, t3 = t2 * t, s = 1.f - t;
+          const float wk[4] = {(1.f / 6.f) * (s * s * s), 0.5f * t3 - t2 + 2.f / 3.f,
+                               -0.5f * t3 + 0.5f * t2 + 0.5f * t + 1.f / 6.f, (1.f / 6.f) * t3};
+          const float dk[4] = {-0.5f * (s * s), 1.5f * t2 - 2.f * t, -1.5f * t2 + t + 0.5f, 0.5f * t2};
           for (int k = 0; k < 4; ++k) {
             W += wk[k] * (right[i0 - 1 + k] - mu);
             G += dk[k] * (right[i0 - 1 + k] - mu);

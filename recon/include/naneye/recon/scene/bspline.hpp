@@ -25,4 +25,8 @@ struct ActiveRect {
 // otherwise). `scratch`: room for the rectangle's floats.
 void bspline_coefficients(const GrayView& in, const ActiveRect& active, float* out, float* scratch);
 
+// The same for one line of n >= 2 samples (in and out may be the same array): out = the coefficients
+// of the line continued as its mirror image at both ends.
+void bspline_coefficients_line(const float* in, int n, float* out);
+
 }  // namespace naneye::recon::scene

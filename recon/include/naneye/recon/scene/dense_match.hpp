@@ -6,9 +6,10 @@
 //      disparity band, census cost, five paths, its left-right check, no uniqueness or speckle
 //      filter: the other decisions are ours, below;
 //   2. sub-pixel: Gauss-Newton on the rectified pixels, every pixel's own window with a gain and an
-//      offset between the eyes (L = a R(x - d) + b), right image sampled by Keys' cubic convolution
-//      (Keys 1981), each pixel of the window warped by its own disparity (so slanted surfaces keep
-//      their shape); the window sums are box filters, so every pixel costs the same;
+//      offset between the eyes (L = a R(x - d) + b), the right rows sampled by the cubic B-spline
+//      (bspline.hpp: Keys' cubic, until 2026-12-06, biased the step towards whole pixels), each pixel
+//      of the window warped by its own disparity (so slanted surfaces keep their shape); the window sums are
+//      box filters, so every pixel costs the same;
 //   3. sigma per pixel from the fit: s^2 (A^-1)_dd / a^2 (A the normal matrix, s^2 the window's
 //      residual variance, floored at the median of windows of its kind), times the correlation
 //      factor of the residual noise measured on the pair itself (interpolation and a Bayer filter
@@ -162,6 +163,7 @@ class RectifiedMatcher {
   void reference_detail();
   const float* window_detail();
   void update_spans(const cv::Mat& valid_left);
+  void spline_rows(const cv::Mat& right, const cv::Mat& valid_right);
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
   int bin_of(const float f[2]) const;
@@ -211,6 +213,9 @@ class RectifiedMatcher {
   // per-pixel planes (sums_, n_, a_, b_, c_, s2_, z_, ...) keep stale values of earlier pairs
   // outside the spans: nothing may read them there.
   std::vector<int> span_lo_, span_hi_;
+  // The right image's rows as cubic B-spline coefficients, each run of valid pixels on its own
+  // (bspline.hpp): what the sub-pixel step samples.
+  std::vector<float> right_spline_;
   std::vector<std::uint8_t> taps_ok_;              // right pixels whose 4 cubic taps are all valid
   bool avx2_ = false;                              // the plane kernels' 8-float versions (dense_simd.hpp)
   std::array<std::uint32_t, 4096> select_hist_{};  // the medians' counts (scene/select.hpp)
