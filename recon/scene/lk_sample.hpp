@@ -19,8 +19,8 @@ struct Warp {
   float m[6];
 };
 
-// out[k] = the cubic B-spline over coefficients `dst` at the warped (qx[k], qy[k]), k < n. False (out undefined) when a
-// point leaves [1, width - 3) x [1, height - 3), where all 16 taps exist.
+// out[k] = the cubic B-spline over coefficients `dst` at the warped (qx[k], qy[k]), k < n. False (out
+// undefined) when a point leaves [1, width - 3) x [1, height - 3), where all 16 taps exist.
 bool sample_window(const GrayView& dst, const Warp& w, const float* qx, const float* qy, int n, float* out);
 // One width: 1 (the plain loop every width must match bit for bit), 4 or 8 (AVX2 only); for tests.
 bool sample_window_lanes(int lanes, const GrayView& dst, const Warp& w, const float* qx, const float* qy,

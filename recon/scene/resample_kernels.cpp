@@ -5,8 +5,8 @@
 #include <immintrin.h>
 
 #include "../corners/simd.hpp"
-#include "interpolate.hpp"
 #include "cubic_simd.hpp"
+#include "interpolate.hpp"
 
 namespace naneye::recon::scene::resample {
 namespace {
