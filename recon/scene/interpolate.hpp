@@ -3,8 +3,8 @@
 // reaches wavelengths of ~4 px, where bilinear interpolation's phase error biases a sub-pixel match
 // towards whole pixels ("pixel locking": 0.05 px rms measured on the simulator's scenes, noise-free,
 // against 0.0x px with this kernel; docs/scene.md). Keys' cubic still locks, by up to 0.018 px in the
-// affine LK (tests/scene/test_lk_affine.cpp): the sparse matcher samples the cubic B-spline instead
-// (bspline.hpp, ~10x less); the dense path and the feature ids use Keys.
+// affine LK (tests/scene/test_lk_affine.cpp): the sparse LK and the dense sub-pixel step sample the
+// cubic B-spline instead (bspline.hpp, ~10x less); the dense rectification and the feature ids Keys.
 #include <algorithm>
 #include <cmath>
 
