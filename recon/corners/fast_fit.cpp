@@ -189,7 +189,7 @@ int levenberg_marquardt(FastFitScratch& w, int n, Vec& p, const std::array<int, 
 
 }  // namespace
 
-FastFitScratch::FastFitScratch() : use_avx2(simd::avx2_available()) {
+FastFitScratch::FastFitScratch() : use_avx2(simd::has_avx2_fma()) {
   for (Arr* a : {&dx, &dy, &yx, &yy, &val, &wt, &r, &E1, &E2, &G1, &G2, &S, &U1, &U2}) a->setZero(kMaxPixels);
   for (std::size_t i = 0; i < J.size(); ++i) {
     J[i].setZero(kMaxPixels);

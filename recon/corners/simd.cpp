@@ -5,8 +5,12 @@
 
 namespace naneye::recon::simd {
 
-bool avx2_available() {
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+bool has_avx2() {
+  return __builtin_cpu_supports("avx2");
+}
+
+bool has_avx2_fma() {
+  return has_avx2() && __builtin_cpu_supports("fma");
 }
 
 void shape_sse(const ModelParams& m, const float* yx, const float* yy, int n, float* U1, float* U2, float* E1,

@@ -1,7 +1,7 @@
 #pragma once
 // The two innermost loops of the corner fit (corners/fast_fit.cpp) written once over a GCC vector
 // type and compiled twice: 4 floats (SSE2, the x86-64 baseline every build runs) and 8 floats in
-// functions compiled for AVX2 + FMA, chosen at run time (simd_avx2_available). No Eigen inside:
+// functions compiled for AVX2 + FMA, chosen at run time (has_avx2_fma). No Eigen inside:
 // Eigen fixes its packet size per translation unit, and two sizes of the same Eigen template in
 // one program would violate the one-definition rule; these plain loops are always inlined into
 // their entry points, so each entry point holds its own code.
@@ -256,8 +256,13 @@ NANEYE_SIMD_INLINE void normal_equations(const std::array<const float*, K + 1>& 
   if constexpr (A + 1 < K) normal_equations<V, K, A + 1>(cols, jw, nv, out);
 }
 
+// The CPU's vector extensions, one test each of the word libgcc fills at start-up, for every kernel
+// that picks its width at run time: AVX2 (the scene kernels, which never fuse a multiply-add, so
+// that every width gives the same bits) and AVX2 + FMA (the corner fits below).
+bool has_avx2();
+bool has_avx2_fma();
+
 // Entry points (corners/simd.cpp): the same loops for 4 and 8 lanes.
-bool avx2_available();
 void shape_sse(const ModelParams& m, const float* yx, const float* yy, int n, float* U1, float* U2, float* E1,
                float* E2, float* G1, float* G2, float* S);
 void shape_avx2(const ModelParams& m, const float* yx, const float* yy, int n, float* U1, float* U2,

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "../corners/simd.hpp"
 #include "dense_simd.hpp"
 #include "naneye/recon/corners/noise.hpp"
 #include "naneye/recon/scene/bspline.hpp"
@@ -58,7 +59,7 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   rho_.assign(49, 0.f);  // lags [-3, 3]^2 (dense_subpixel.cpp)
   span_lo_.assign(static_cast<std::size_t>(h_), 0);
   span_hi_.assign(static_cast<std::size_t>(h_), 0);
-  avx2_ = dense_simd::avx2_available();
+  avx2_ = simd::has_avx2();
   features_.assign(2 * n, 0.f);
   bin_.assign(n, 0);
   taps_ok_.assign(n, 0);

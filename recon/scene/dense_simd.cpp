@@ -329,10 +329,6 @@ __attribute__((target("avx2"))) void lag_products_avx2(const float* e, int w, in
 }
 }  // namespace
 
-bool avx2_available() {
-  return __builtin_cpu_supports("avx2");
-}
-
 void box_sum(bool avx2, const float* in, float* out, float* tmp, const Spans& sp, int r) {
   (avx2 ? box_sum_avx2 : box_sum_sse)(in, out, tmp, sp, r);
 }

@@ -9,8 +9,6 @@
 
 namespace naneye::recon::scene::dense_simd {
 
-bool avx2_available();
-
 // The rows' spans of left data (RectifiedMatcher::span_lo_, span_hi_): the per-pixel work runs
 // only there, ~70 % of the rectified grid (its band columns and the domain disc's corners carry
 // nothing).

@@ -6,7 +6,6 @@
 #include <cassert>
 
 #include "../corners/simd.hpp"
-#include "lk_sample.hpp"  // the LK kernels' one AVX2 test
 
 namespace naneye::recon::scene::lk_dots {
 namespace {
@@ -116,7 +115,7 @@ __attribute__((target("avx2"))) void dot_avx2(const float* a, float c, const flo
 
 void dot_many(const float* a, float c, const float* const* b, int m, int n8, double* out) {
   assert(m >= 0 && m <= kMaxArrays && n8 % kBlock == 0);
-  (lk_sample::avx2_available() ? dot_avx2 : dot_sse)(a, c, b, m, n8, out);
+  (simd::has_avx2() ? dot_avx2 : dot_sse)(a, c, b, m, n8, out);
 }
 
 void dot_many_lanes(int lanes, const float* a, float c, const float* const* b, int m, int n8, double* out) {

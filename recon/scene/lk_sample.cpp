@@ -91,12 +91,8 @@ __attribute__((target("avx2"))) bool sample_avx2(const GrayView& g, const Warp& 
 }
 }  // namespace
 
-bool avx2_available() {
-  return __builtin_cpu_supports("avx2");
-}
-
 bool sample_window(const GrayView& dst, const Warp& w, const float* qx, const float* qy, int n, float* out) {
-  return (avx2_available() ? sample_avx2 : sample_sse)(dst, w, qx, qy, n, out);
+  return (simd::has_avx2() ? sample_avx2 : sample_sse)(dst, w, qx, qy, n, out);
 }
 
 bool sample_window_lanes(int lanes, const GrayView& dst, const Warp& w, const float* qx, const float* qy,

@@ -11,8 +11,6 @@
 
 namespace naneye::recon::scene::lk_sample {
 
-bool avx2_available();
-
 // The warp x = m[0] qx + m[1] qy + m[2], y = m[3] qx + m[4] qy + m[5] (float: a raw pixel position
 // below 2^8 keeps 1.5e-5 px, a thousandth of the matches' precision).
 struct Warp {

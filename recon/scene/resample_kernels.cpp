@@ -71,7 +71,7 @@ __attribute__((target("avx2"))) void taps_avx2(const float* raw, int raw_width, 
 
 void taps(const float* raw, int raw_width, const int* tap, const float* fx, const float* fy, std::size_t n,
           float* out) {
-  (__builtin_cpu_supports("avx2") ? taps_avx2 : taps_sse)(raw, raw_width, tap, fx, fy, n, out);
+  (simd::has_avx2() ? taps_avx2 : taps_sse)(raw, raw_width, tap, fx, fy, n, out);
 }
 
 void taps_lanes(int lanes, const float* raw, int raw_width, const int* tap, const float* fx, const float* fy,

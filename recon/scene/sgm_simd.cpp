@@ -9,6 +9,7 @@
 
 #include <algorithm>
 
+#include "../corners/simd.hpp"
 #include "sgm_vec.hpp"
 
 namespace naneye::recon::scene::sgm_simd {
@@ -200,7 +201,7 @@ __attribute__((target("avx2"))) void wta_avx2(const std::int16_t* sum, int D, in
 }  // namespace
 
 Isa best_isa() {
-  return __builtin_cpu_supports("avx2") ? Isa::avx2 : Isa::sse2;
+  return simd::has_avx2() ? Isa::avx2 : Isa::sse2;
 }
 
 void census_row(Isa isa, const float* img, std::size_t stride, int w, int h, int y, int x0, int x1,

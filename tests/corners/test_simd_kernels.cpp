@@ -20,7 +20,7 @@ using ShapeFn = void (*)(const simd::ModelParams&, const float*, const float*, i
 
 std::vector<ShapeFn> shape_kernels() {
   std::vector<ShapeFn> k{simd::shape_sse};
-  if (simd::avx2_available()) k.push_back(simd::shape_avx2);
+  if (simd::has_avx2_fma()) k.push_back(simd::shape_avx2);
   return k;
 }
 
@@ -121,7 +121,7 @@ TEST(SimdKernels, NormalEquationsMatchADoubleSum) {
   for (std::size_t c = 0; c < K; ++c) jw[c] = Jw[c].data();
   std::array<double, (K + 1) * K> sse{}, avx{};
   simd::normal_equations_sse<K>(cols, jw, nv, sse);
-  if (simd::avx2_available()) simd::normal_equations_avx2<K>(cols, jw, nv, avx);
+  if (simd::has_avx2_fma()) simd::normal_equations_avx2<K>(cols, jw, nv, avx);
   for (int a = 0; a < K; ++a) {
     for (int b = a; b <= K; ++b) {
       double ref = 0;
@@ -129,7 +129,7 @@ TEST(SimdKernels, NormalEquationsMatchADoubleSum) {
         ref += 0.5 * J[static_cast<std::size_t>(a)][i] * J[static_cast<std::size_t>(b)][i];
       const auto k = static_cast<std::size_t>(a * (K + 1) + b);
       EXPECT_NEAR(sse[k], ref, 2e-5 * (1 + std::abs(ref))) << a << "," << b;
-      if (simd::avx2_available()) {
+      if (simd::has_avx2_fma()) {
         EXPECT_NEAR(avx[k], ref, 2e-5 * (1 + std::abs(ref))) << a << "," << b;
       }
     }
@@ -137,7 +137,7 @@ TEST(SimdKernels, NormalEquationsMatchADoubleSum) {
 }
 
 TEST(SimdKernels, FourAndEightLaneFitsAgree) {
-  if (!simd::avx2_available()) GTEST_SKIP() << "no AVX2 + FMA on this CPU: only the 4-lane build runs";
+  if (!simd::has_avx2_fma()) GTEST_SKIP() << "no AVX2 + FMA on this CPU: only the 4-lane build runs";
   const StereoRig& rig = test::paper_d3();
   CornerDetector det(rig.left);
   std::mt19937_64 rng(33);

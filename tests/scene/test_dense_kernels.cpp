@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "../../recon/corners/simd.hpp"
 #include "../../recon/scene/dense_simd.hpp"
 #include "../../recon/scene/select.hpp"
 
@@ -17,7 +18,7 @@ namespace {
 
 std::vector<bool> dense_kernel_builds() {
   std::vector<bool> b{false};
-  if (dense_simd::avx2_available()) b.push_back(true);
+  if (simd::has_avx2()) b.push_back(true);
   return b;
 }
 

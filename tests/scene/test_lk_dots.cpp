@@ -8,15 +8,15 @@
 #include <random>
 #include <vector>
 
+#include "../../recon/corners/simd.hpp"
 #include "../../recon/scene/lk_dots.hpp"
-#include "../../recon/scene/lk_sample.hpp"
 
 namespace naneye::recon::scene {
 namespace {
 
 std::vector<int> dot_widths() {
   std::vector<int> l{1, 4};
-  if (lk_sample::avx2_available()) l.push_back(8);
+  if (simd::has_avx2()) l.push_back(8);
   return l;
 }
 

@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "../../recon/corners/simd.hpp"
 #include "../../recon/scene/interpolate.hpp"
 #include "../../recon/scene/lk_sample.hpp"
 
@@ -30,7 +31,7 @@ Image noise_image(int w, int h, std::mt19937& rng) {
 
 std::vector<int> widths() {
   std::vector<int> l{1, 4};
-  if (lk_sample::avx2_available()) l.push_back(8);
+  if (simd::has_avx2()) l.push_back(8);
   return l;
 }
 

@@ -6,8 +6,8 @@
 #include <random>
 #include <vector>
 
+#include "../../recon/corners/simd.hpp"
 #include "../../recon/scene/interpolate.hpp"
-#include "../../recon/scene/lk_sample.hpp"
 #include "../../recon/scene/resample_kernels.hpp"
 
 namespace naneye::recon::scene {
@@ -44,7 +44,7 @@ TEST(ResampleKernels, EveryWidthGivesTheCubicsBitsAndInvalidTapsGiveZero) {
   }
   EXPECT_GT(invalid, 100);
   std::vector<int> widths{4};
-  if (lk_sample::avx2_available()) widths.push_back(8);
+  if (simd::has_avx2()) widths.push_back(8);
   for (const int lanes : widths) {
     std::vector<float> out(n, -1.f);
     resample::taps_lanes(lanes, raw.data(), w, tap.data(), fx.data(), fy.data(), n, out.data());
