@@ -1,13 +1,13 @@
 // See bspline.hpp. The prefilter is the inverse of the sampled B-spline, 6 / (z + 4 + 1/z): a causal
 // and an anti-causal first-order recursion with the pole z1 = sqrt(3) - 2 and the gain 6 (Unser 1999,
 // Box 2), down the columns (all columns at once: whole rows as vectors) and then along the rows (the
-// same, on the transposed block). A recursion along each row on its own was 3.0 M instructions per
-// image (callgrind), latency-bound and unvectorised.
+// same, on the block transposed by OpenCV). A recursion along each row on its own was 3.0 M
+// instructions per image (callgrind), latency-bound and unvectorised.
 #include "naneye/recon/scene/bspline.hpp"
 
-#include <xmmintrin.h>
 #include <algorithm>
 #include <cstddef>
+#include <opencv2/core.hpp>
 #include <stdexcept>
 
 #include "../corners/simd.hpp"
@@ -62,27 +62,6 @@ void filter_columns(float* p, int rows, int cols, std::ptrdiff_t stride) {
              [](auto cur, auto next) { return kPole * (next - cur); });
 }
 
-// dst[c * dst_stride + r] = src[r * src_stride + c] for r < rows, c < cols: 4 x 4 blocks through
-// SSE registers (scalar, 6 instructions per element: 0.37 M per pass at 250 x 250), the edges one by one.
-void transpose(const float* src, std::ptrdiff_t src_stride, float* dst, std::ptrdiff_t dst_stride, int rows,
-               int cols) {
-  const int r4 = rows / 4 * 4, c4 = cols / 4 * 4;
-  for (int r = 0; r < r4; r += 4)
-    for (int c = 0; c < c4; c += 4) {
-      const float* s0 = src + r * src_stride + c;
-      __m128 a = _mm_loadu_ps(s0), b = _mm_loadu_ps(s0 + src_stride), e = _mm_loadu_ps(s0 + 2 * src_stride),
-             f = _mm_loadu_ps(s0 + 3 * src_stride);
-      _MM_TRANSPOSE4_PS(a, b, e, f);
-      float* d0 = dst + c * dst_stride + r;
-      _mm_storeu_ps(d0, a);
-      _mm_storeu_ps(d0 + dst_stride, b);
-      _mm_storeu_ps(d0 + 2 * dst_stride, e);
-      _mm_storeu_ps(d0 + 3 * dst_stride, f);
-    }
-  for (int r = 0; r < rows; ++r)
-    for (int c = r < r4 ? c4 : 0; c < cols; ++c) dst[c * dst_stride + r] = src[r * src_stride + c];
-}
-
 }  // namespace
 
 void bspline_coefficients_line(const float* in, int n, float* out) {
@@ -109,9 +88,13 @@ void bspline_coefficients(const GrayView& in, const ActiveRect& a, float* out, f
   }
   filter_columns(first, rows, a.cols, w);
   // Along the rows: the same filter down the columns of the transposed block.
-  transpose(first, w, scratch, rows, rows, a.cols);
+  // Headers over the caller's buffers: cv::transpose writes into them (their size and type already
+  // match), nothing is allocated.
+  const cv::Mat block(rows, a.cols, CV_32FC1, first, static_cast<std::size_t>(w) * sizeof(float));
+  cv::Mat flipped(a.cols, rows, CV_32FC1, scratch);
+  cv::transpose(block, flipped);
   filter_columns(scratch, a.cols, rows, rows);
-  transpose(scratch, rows, first, w, a.cols, rows);
+  cv::transpose(flipped, block);
   // Beyond the rectangle: the mirrored coefficients.
   for (int r = a.row_begin; r < a.row_end; ++r) {
     float* row = out + static_cast<std::ptrdiff_t>(r) * w;
