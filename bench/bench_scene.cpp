@@ -6,9 +6,9 @@
 //           (raw_to_luminance, min-max stretched to 8 bits for OpenCV).
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
-//   build/bench/bench_scene [--seeds N] [--bayer] [--real-sensor] [--defocus SIGMA] [--refusals]
-//       [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z] [--raw-search]
-//       [--wide-radius R] [--dense-radius R] [--max-radius R]
+//   build/bench/bench_scene [--seeds N] [--repeat N] [--bayer] [--real-sensor] [--defocus SIGMA]
+//       [--refusals] [--digest] [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z]
+//       [--raw-search] [--wide-radius R] [--dense-radius R] [--max-radius R]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
 // features per pair by status. What-ifs, one setting changed: --residual-p P, --max-sigma PX, the
@@ -22,6 +22,11 @@
 // in the daemon).
 // --defocus SIGMA: the renders' defocus blur, px (sim/sensor.hpp; default 0.35, with diffraction
 // 0.41 px in all: ~3x sharper than a real NanEye's edges, 1.0-1.6 px, ../shared/notes/measurements.md).
+// --repeat N: each path reconstructs every render N times, all timed (steadier medians; a profile
+// of the paths rather than of the renderer under perf). The sparse ids then follow the repeats.
+// --digest: per scene, one 64-bit FNV-1a hash over every render's sparse points (status, id, both
+// pixels, xyz, sigma) and one over its dense maps (depth and sigma), to show a speed change leaves
+// the results bit for bit as they were (run before and after with the same flags, compare the lines).
 // --real-sensor: the renders through the real NanEye's measured figures (sim::SensorSettings::measured:
 // blur 1.0 px, its shot and read noise, fixed-pattern noise, the reset line); --defocus still applies.
 #include <time.h>
@@ -50,6 +55,30 @@
 
 namespace {
 using namespace naneye;
+
+// FNV-1a (64 bit) over raw bytes, chained: a change in any bit of any result changes the digest.
+struct Digest {
+  std::uint64_t h = 14695981039346656037ull;
+  void add(const void* p, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  }
+  template <class T>
+  void add(const T& v) {
+    add(&v, sizeof v);
+  }
+};
+
+void digest_sparse(Digest& d, const recon::scene::SparseResult& r) {
+  for (const auto& q : r.points) {
+    d.add(static_cast<int>(q.status));
+    d.add(q.id);
+    d.add(q.left_px.data(), 2 * sizeof(double));
+    d.add(q.right_px.data(), 2 * sizeof(double));
+    d.add(q.X.data(), 3 * sizeof(double));
+    d.add(q.depth_sigma_mm);
+  }
+}
 
 double thread_cpu_s() {
   timespec ts{};
@@ -258,7 +287,8 @@ void print_sparse_refusals(const std::vector<StatusRow>& rows, int seeds) {
 
 int main(int argc, char** argv) {
   int seeds = 3;
-  bool bayer = false, refusals = false;
+  int repeat = 1;  // reconstructions timed per render: > 1 for perf and steadier times
+  bool bayer = false, refusals = false, digest = false;
   recon::scene::DenseSettings ds;
   recon::scene::SparseSettings ss;
   sim::SensorSettings sensor;
@@ -266,8 +296,10 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--real-sensor")) sensor = sim::SensorSettings::measured(false);
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) seeds = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
     if (!std::strcmp(argv[i], "--bayer")) bayer = true;
     if (!std::strcmp(argv[i], "--refusals")) refusals = true;
+    if (!std::strcmp(argv[i], "--digest")) digest = true;
     // What-if: one validity test loosened, to see what the pixels it refuses would give.
     if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
@@ -293,6 +325,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<DenseTally, DenseTally>> dense_rows;
   std::vector<recon::scene::MatchCounts> refused;
   std::vector<StatusRow> statuses;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> digests;
   std::printf("bench_scene: %d renders per scene, %s, blur sigma %.2f px, %s, paper-d3 rig, one thread\n",
               seeds, bayer ? "GRBG Bayer" : "mono", sensor.blur_sigma_px(),
               sensor.dsnu_dn > 0 ? "the real sensor's noise and fixed patterns" : "the simulator's sensor");
@@ -304,22 +337,30 @@ int main(int argc, char** argv) {
     DenseTally da, db;
     recon::scene::MatchCounts mc;
     StatusRow st{};
+    Digest dg_sparse, dg_dense;
     for (int s = 0; s < seeds; ++s) {
       const sim::TexturedPair p = sim::numbered_render(renderer, name, s);
       const auto lv = sim::raw_view(p.left, bayer), rv = sim::raw_view(p.right, bayer);
-      const double t0 = thread_cpu_s();
-      ours.reconstruct(lv, rv, res);
-      a.ms.push_back(1e3 * (thread_cpu_s() - t0));
+      for (int k = 0; k < repeat; ++k) {
+        const double t0 = thread_cpu_s();
+        ours.reconstruct(lv, rv, res);
+        a.ms.push_back(1e3 * (thread_cpu_s() - t0));
+      }
       ++a.pairs;
+      digest_sparse(dg_sparse, res);
       for (const auto& q : res.points) {
         ++st[static_cast<std::size_t>(q.status)];
         if (q.valid()) a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y());
       }
       opencv_path(rig, ours.luma(), p.depth, b);
       // Dense on the luminance the sparse path made (the daemon shares it the same way).
-      const double t1 = thread_cpu_s();
-      dense.reconstruct(ours.luma(), depth);
-      da.ms.push_back(1e3 * (thread_cpu_s() - t1));
+      for (int k = 0; k < repeat; ++k) {
+        const double t1 = thread_cpu_s();
+        dense.reconstruct(ours.luma(), depth);
+        da.ms.push_back(1e3 * (thread_cpu_s() - t1));
+      }
+      dg_dense.add(depth.z_mm.data(), depth.z_mm.size() * sizeof(float));
+      dg_dense.add(depth.sigma_mm.data(), depth.sigma_mm.size() * sizeof(float));
       da.add(cv::Mat(depth.height, depth.width, CV_32FC1, depth.z_mm.data()), p.depth);
       add_counts(mc, dense.match_counts());
       da.radii += (da.radii.empty() ? "" : " ") + std::to_string(dense.matcher().radius_used());
@@ -328,6 +369,7 @@ int main(int argc, char** argv) {
     dense_rows.emplace_back(da, db);
     refused.push_back(mc);
     statuses.push_back(st);
+    digests.emplace_back(dg_sparse.h, dg_dense.h);
     auto row = [](Tally& t) {
       std::printf(" %7.2f %7.0f %9.0f %8.2f%% %6.2f%%", t.p50(), double(t.points) / t.pairs,
                   double(t.points - t.outliers) / t.pairs, 100.0 * t.outliers / std::max(1L, t.points),
@@ -362,6 +404,11 @@ int main(int argc, char** argv) {
       "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
       "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our window "
       "radius per pair, px\n");
+  if (digest)
+    for (std::size_t k = 0; k < digests.size(); ++k)
+      std::printf("digest %-10s sparse %016llx dense %016llx\n", sim::textured_preset_names()[k].c_str(),
+                  static_cast<unsigned long long>(digests[k].first),
+                  static_cast<unsigned long long>(digests[k].second));
   if (refusals) {
     print_refusals(refused);
     print_sparse_refusals(statuses, seeds);
