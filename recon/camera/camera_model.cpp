@@ -64,14 +64,6 @@ std::optional<double> CameraModel::fold_radius_px() const {
   return *fold_rd_ * fx();
 }
 
-Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& xn) const {
-  const double x = xn.x(), y = xn.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (d_.k1 + r2 * (d_.k2 + r2 * d_.k3));
-  return {x * radial + 2.0 * d_.p1 * x * y + d_.p2 * (r2 + 2.0 * x * x),
-          y * radial + d_.p1 * (r2 + 2.0 * y * y) + 2.0 * d_.p2 * x * y};
-}
-
 Eigen::Matrix2d CameraModel::distort_jacobian(const Eigen::Vector2d& xn) const {
   const double x = xn.x(), y = xn.y();
   const double r2 = x * x + y * y;
@@ -85,17 +77,9 @@ Eigen::Matrix2d CameraModel::distort_jacobian(const Eigen::Vector2d& xn) const {
   return J;
 }
 
-Eigen::Vector2d CameraModel::to_pixel(const Eigen::Vector2d& xd) const {
-  return {fx() * xd.x() + skew() * xd.y() + cx(), fy() * xd.y() + cy()};
-}
-
 Eigen::Vector2d CameraModel::from_pixel(const Eigen::Vector2d& px) const {
   const double yd = (px.y() - cy()) / fy();
   return {(px.x() - cx() - skew() * yd) / fx(), yd};
-}
-
-Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& X) const {
-  return to_pixel(distort(X.head<2>() / X.z()));
 }
 
 Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& X, Eigen::Matrix<double, 2, 3>& J) const {
