@@ -103,6 +103,11 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   rays_.assign(2 * np, 0.0);  // never read outside the domain: features' windows lie inside it
   const std::vector<std::uint8_t> domain[2] = {domain_mask(rig_.left, layout, rays_.data()),
                                                domain_mask(rig_.right, layout, nullptr)};
+  right_rays_.assign(3 * np, 0.0);
+  for (std::size_t i = 0; i < np; ++i) {
+    Eigen::Map<Eigen::Vector3d> r(&right_rays_[3 * i]);
+    r = rig_.R * Eigen::Vector3d(rays_[2 * i], rays_[2 * i + 1], 1.0);
+  }
   const int w[2] = {rig_.left.width(), rig_.right.width()}, h[2] = {rig_.left.height(), rig_.right.height()};
   const auto usable_mask = [&](int eye, int radius) { return eroded(domain[eye], w[eye], h[eye], radius); };
   usable_[0] = usable_mask(0, s_.lk.radius + 1);
@@ -247,7 +252,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   const Eigen::Matrix2d A0 = predicted_affine(rig_, xl, m.w);
   // Where each template pixel lands in the right image for a surface facing the camera at the
   // coarse depth (exact model): near the image edges the map bends within the window.
-  predict_shape(f, xl, m.w, s_.lk.radius, -1, shape_.data());
+  predict_shape(f, m.w, s_.lk.radius, -1, shape_.data());
   LkSettings lks = s_.lk;
   if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
   const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),

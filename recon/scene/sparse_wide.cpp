@@ -52,17 +52,19 @@ void SparseReconstructor::init_wide() {
   cell_point_.assign(static_cast<std::size_t>(gw) * gh, -1);
 }
 
-void SparseReconstructor::predict_shape(const Feature& f, const Eigen::Vector2d& xl, double w, int rad,
-                                        int skip, Eigen::Vector2d* out) const {
+void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int skip,
+                                        Eigen::Vector2d* out) const {
   const double z = 1.0 / w;
-  const Eigen::Vector3d Xc = rig_.R * Eigen::Vector3d(xl.x(), xl.y(), 1.0) * z + rig_.T;
-  const Eigen::Vector2d c0 = rig_.right.project(Xc);
+  const auto right_point = [&](std::size_t i) {
+    return Eigen::Vector3d(Eigen::Map<const Eigen::Vector3d>(&right_rays_[3 * i]) * z + rig_.T);
+  };
+  const Eigen::Vector2d c0 =
+      rig_.right.project(right_point(static_cast<std::size_t>(f.v) * luma_.width + f.u));
   for (int dr = -rad, k = 0; dr <= rad; ++dr)
     for (int dc = -rad; dc <= rad; ++dc, ++k) {
       if (std::max(std::abs(dr), std::abs(dc)) <= skip) continue;
-      const std::size_t i = static_cast<std::size_t>(f.v + dr) * luma_.width + f.u + dc;
-      const Eigen::Vector3d ray(rays_[2 * i], rays_[2 * i + 1], 1.0);
-      out[k] = rig_.right.project(rig_.R * ray * z + rig_.T) - c0;
+      out[k] =
+          rig_.right.project(right_point(static_cast<std::size_t>(f.v + dr) * luma_.width + f.u + dc)) - c0;
     }
 }
 
@@ -77,7 +79,7 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, co
     for (int dc = -rn; dc <= rn; ++dc)
       shape_wide_[static_cast<std::size_t>((dr + rw) * sw + dc + rw)] =
           shape_[static_cast<std::size_t>((dr + rn) * sn + dc + rn)];
-  predict_shape(f, xl, w, rw, rn, shape_wide_.data());
+  predict_shape(f, w, rw, rn, shape_wide_.data());
   LkSettings wl = lks;
   wl.radius = rw;
   wl.inner_radius = rn;

@@ -171,8 +171,7 @@ class SparseReconstructor {
   // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
   // right image for a surface facing the camera at inverse depth w (exact model), relative to the
   // centre's place, row-major over the (2 rad + 1)^2 window.
-  void predict_shape(const Feature& f, const Eigen::Vector2d& xl, double w, int rad, int skip,
-                     Eigen::Vector2d* out) const;
+  void predict_shape(const Feature& f, double w, int rad, int skip, Eigen::Vector2d* out) const;
   // The wider window's refinement of `narrow` where its feature's window fits and it passes its own
   // tests (sparse_wide.cpp), else not converged; `hausman`: its shift test's statistic (or -1).
   LkResult widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
@@ -199,7 +198,10 @@ class SparseReconstructor {
   FeatureIds ids_;
   std::vector<std::int64_t> id_scratch_;
   EpipolarCurve curve_, back_curve_;
-  std::vector<double> rays_;                 // left pixel centres' normalized rays (x, y)
+  std::vector<double> rays_;  // left pixel centres' normalized rays (x, y)
+  // The same rays turned into the right camera's frame, R (x, y, 1), 3 per pixel: the LK shape
+  // (predict_shape) needs X_r = R ray z + T at ~170 pixels per feature, and R ray is fixed.
+  std::vector<double> right_rays_;
   std::vector<float> inv_norm_[2];           // per pixel: 1 / |window - mean| of the coarse window
   std::vector<double> norm_scratch_;         // scratch of window_inverse_norms
   std::vector<Eigen::Vector2d> shape_;       // the LK template's predicted places in the right image
