@@ -103,10 +103,10 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   rays_.assign(2 * np, 0.0);  // never read outside the domain: features' windows lie inside it
   const std::vector<std::uint8_t> domain[2] = {domain_mask(rig_.left, layout, rays_.data()),
                                                domain_mask(rig_.right, layout, nullptr)};
-  right_rays_.assign(3 * np, 0.0);
+  right_rays_.assign(3 * np, 0.0);  // planes x, y, z: predict_shape reads them two pixels at a time
   for (std::size_t i = 0; i < np; ++i) {
-    Eigen::Map<Eigen::Vector3d> r(&right_rays_[3 * i]);
-    r = rig_.R * Eigen::Vector3d(rays_[2 * i], rays_[2 * i + 1], 1.0);
+    const Eigen::Vector3d r = rig_.R * Eigen::Vector3d(rays_[2 * i], rays_[2 * i + 1], 1.0);
+    for (int a = 0; a < 3; ++a) right_rays_[a * np + i] = r[a];
   }
   const int w[2] = {rig_.left.width(), rig_.right.width()}, h[2] = {rig_.left.height(), rig_.right.height()};
   const auto usable_mask = [&](int eye, int radius) { return eroded(domain[eye], w[eye], h[eye], radius); };

@@ -199,8 +199,8 @@ class SparseReconstructor {
   std::vector<std::int64_t> id_scratch_;
   EpipolarCurve curve_, back_curve_;
   std::vector<double> rays_;  // left pixel centres' normalized rays (x, y)
-  // The same rays turned into the right camera's frame, R (x, y, 1), 3 per pixel: the LK shape
-  // (predict_shape) needs X_r = R ray z + T at ~170 pixels per feature, and R ray is fixed.
+  // The same rays turned into the right camera's frame, R (x, y, 1), as three planes (x, y, z): the
+  // LK shape (predict_shape) needs X_r = R ray z + T at ~170 pixels per feature, and R ray is fixed.
   std::vector<double> right_rays_;
   std::vector<float> inv_norm_[2];           // per pixel: 1 / |window - mean| of the coarse window
   std::vector<double> norm_scratch_;         // scratch of window_inverse_norms
