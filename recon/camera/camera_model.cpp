@@ -82,6 +82,27 @@ Eigen::Vector2d CameraModel::from_pixel(const Eigen::Vector2d& px) const {
   return {(px.x() - cx() - skew() * yd) / fx(), yd};
 }
 
+void CameraModel::project_rays_at(const double* rx, const double* ry, const double* rz, double z,
+                                  const Eigen::Vector3d& t, int n, Eigen::Vector2d* out) const {
+  // distort() and to_pixel() written out on two lanes, operation for operation in their order (no
+  // FMA on x86-64's baseline: each lane rounds as the scalar code does).
+  using D2 = double __attribute__((vector_size(16)));
+  int j = 0;
+  for (; !d_.has_tangential() && j + 2 <= n; j += 2) {
+    const D2 X = D2{rx[j], rx[j + 1]} * z + t.x(), Y = D2{ry[j], ry[j + 1]} * z + t.y(),
+             Z = D2{rz[j], rz[j + 1]} * z + t.z();
+    const D2 x = X / Z, y = Y / Z;
+    const D2 r2 = x * x + y * y;
+    const D2 radial = 1.0 + r2 * (d_.k1 + r2 * (d_.k2 + r2 * d_.k3));
+    const D2 xd = x * radial, yd = y * radial;
+    const D2 u = fx() * xd + skew() * yd + cx(), v = fy() * yd + cy();
+    out[j] = Eigen::Vector2d(u[0], v[0]);
+    out[j + 1] = Eigen::Vector2d(u[1], v[1]);
+  }
+  for (; j < n; ++j)
+    out[j] = project(Eigen::Vector3d(rx[j] * z + t.x(), ry[j] * z + t.y(), rz[j] * z + t.z()));
+}
+
 Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& X, Eigen::Matrix<double, 2, 3>& J) const {
   const double iz = 1.0 / X.z();
   const Eigen::Vector2d xn = X.head<2>() * iz;

@@ -57,42 +57,27 @@ void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int
   const double z = 1.0 / w;
   const std::size_t np = right_rays_.size() / 3;
   const double *rx = right_rays_.data(), *ry = rx + np, *rz = ry + np;
-  const Eigen::Vector3d& T = rig_.T;
   const CameraModel& cam = rig_.right;
-  const auto point = [&](std::size_t i) {
-    return Eigen::Vector3d(rx[i] * z + T.x(), ry[i] * z + T.y(), rz[i] * z + T.z());
+  // Runs of one row: the window's pixels i0 .. i0 + n - 1 to o[0 .. n - 1].
+  const auto run = [&](std::size_t i0, int n, Eigen::Vector2d* o) {
+    cam.project_rays_at(rx + i0, ry + i0, rz + i0, z, rig_.T, n, o);
   };
-  const Eigen::Vector2d c0 = cam.project(point(static_cast<std::size_t>(f.v) * luma_.width + f.u));
-  // CameraModel::project's arithmetic, operation for operation (the same bits), on two pixels at a
-  // time in SSE2 (x86-64's baseline): radial model only, as the paper's; else the scalar call.
-  using D2 = double __attribute__((vector_size(16)));
-  const Distortion& d = cam.distortion();
-  const bool radial = !d.has_tangential();
-  const auto span = [&](std::size_t i0, int n, Eigen::Vector2d* o) {
-    int j = 0;
-    for (; radial && j + 2 <= n; j += 2) {
-      const std::size_t i = i0 + static_cast<std::size_t>(j);
-      const D2 X = D2{rx[i], rx[i + 1]} * z + T.x(), Y = D2{ry[i], ry[i + 1]} * z + T.y(),
-               Z = D2{rz[i], rz[i + 1]} * z + T.z();
-      const D2 x = X / Z, y = Y / Z;
-      const D2 r2 = x * x + y * y;
-      const D2 k = 1.0 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-      const D2 xd = x * k, yd = y * k;
-      const D2 u = cam.fx() * xd + cam.skew() * yd + cam.cx(), v = cam.fy() * yd + cam.cy();
-      o[j] = Eigen::Vector2d(u[0] - c0.x(), v[0] - c0.y());
-      o[j + 1] = Eigen::Vector2d(u[1] - c0.x(), v[1] - c0.y());
-    }
-    for (; j < n; ++j) o[j] = cam.project(point(i0 + static_cast<std::size_t>(j))) - c0;
-  };
+  Eigen::Vector2d c0;
+  run(static_cast<std::size_t>(f.v) * luma_.width + f.u, 1, &c0);
   const int side = 2 * rad + 1;
   for (int dr = -rad; dr <= rad; ++dr) {
     const std::size_t row = static_cast<std::size_t>(f.v + dr) * luma_.width + f.u;
     Eigen::Vector2d* o = out + (dr + rad) * side + rad;  // this row's dc = 0
     if (std::abs(dr) > skip) {
-      span(row - rad, side, o - rad);
+      run(row - rad, side, o - rad);
+      for (int dc = -rad; dc <= rad; ++dc) o[dc] -= c0;
     } else {  // the ring's two pieces either side of the skipped square
-      span(row - rad, rad - skip, o - rad);
-      span(row + skip + 1, rad - skip, o + skip + 1);
+      run(row - rad, rad - skip, o - rad);
+      run(row + skip + 1, rad - skip, o + skip + 1);
+      for (int dc = skip + 1; dc <= rad; ++dc) {
+        o[-dc] -= c0;
+        o[dc] -= c0;
+      }
     }
   }
 }

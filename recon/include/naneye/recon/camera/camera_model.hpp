@@ -58,6 +58,11 @@ class CameraModel {
   Eigen::Vector2d from_pixel(const Eigen::Vector2d& px) const;
   // Paper Eq. 3-6: a 3D point in this camera's frame (Z > 0) -> raw pixel.
   Eigen::Vector2d project(const Eigen::Vector3d& X) const;
+  // project() of the n points r_i z + t (the rays r_i, given as planes x, y, z, at one depth z, moved
+  // by t): the same bits as project(r_i * z + t) point by point, two points per SSE2 operation for
+  // the radial-only model (the scene paths' window shapes: ~170 points per feature).
+  void project_rays_at(const double* rx, const double* ry, const double* rz, double z,
+                       const Eigen::Vector3d& t, int n, Eigen::Vector2d* out) const;
   // project() and its 2x3 Jacobian d(pixel)/dX: K(2x2) * distort_jacobian * d(X/Z, Y/Z)/dX.
   Eigen::Vector2d project(const Eigen::Vector3d& X, Eigen::Matrix<double, 2, 3>& J) const;
   // Raw pixel -> normalized, the exact inverse of distort(): Newton with the analytic Jacobian.
