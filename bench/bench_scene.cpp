@@ -8,7 +8,7 @@
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--repeat N] [--bayer] [--real-sensor] [--defocus SIGMA]
 //       [--refusals] [--digest] [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z]
-//       [--raw-search] [--wide-radius R] [--dense-radius R] [--max-radius R]
+//       [--raw-search] [--wide-radius R] [--dense-radius R] [--max-radius R] [--dense-iterations N]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
 // features per pair by status. What-ifs, one setting changed: --residual-p P, --max-sigma PX, the
@@ -17,9 +17,9 @@
 // luminance (SparseSettings::search_binomial off); --wide-radius R, the sparse path's wider LK
 // window (0: the narrow window only). --dense-radius R: the dense sub-pixel window, fixed;
 // --max-radius R: the largest window the matcher may choose per pair (R = 3: fixed at 3, as before
-// the choice). The dense table's r column: the radius each pair was matched with, in render order
-// (the matcher carries it from pair to pair, and from scene to scene: one matcher for the run, as
-// in the daemon).
+// the choice). --dense-iterations N: the dense sub-pixel step's Gauss-Newton passes (default 4). The dense
+// table's r column: the radius each pair was matched with, in render order (the matcher carries it from pair
+// to pair, and from scene to scene: one matcher for the run, as in the daemon).
 // --defocus SIGMA: the renders' defocus blur, px (sim/sensor.hpp; default 0.35, with diffraction
 // 0.41 px in all: ~3x sharper than a real NanEye's edges, 1.0-1.6 px, ../shared/notes/measurements.md).
 // --repeat N: each path reconstructs every render N times, all timed (steadier medians; a profile
@@ -310,6 +310,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--dense-iterations") && i + 1 < argc)
+      ds.matcher.iterations = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--defocus") && i + 1 < argc) sensor.defocus_sigma_px = std::atof(argv[++i]);
   }
   cv::setNumThreads(1);  // one core for both paths
