@@ -167,12 +167,13 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   std::fill(ones, ones + n, 1.f);
   std::fill(ones + n, ones + n8, 0.f);
   std::fill(inner, inner + n8, 0.f);
-  const int ri = s.inner_radius;
-  if (ri > 0)
-    for (int dr = -std::min(ri, rad); dr <= std::min(ri, rad); ++dr) {
-      float* row = inner + (dr + rad) * side + rad;
-      std::fill(row - std::min(ri, rad), row + std::min(ri, rad) + 1, 1.f);
+  if (s.inner_radius > 0) {
+    const int ri = std::min(s.inner_radius, rad);
+    for (int dr = -ri; dr <= ri; ++dr) {
+      float* centre_of_row = inner + (dr + rad) * side + rad;
+      std::fill(centre_of_row - ri, centre_of_row + ri + 1, 1.f);
     }
+  }
   mean /= n;
   double ss = 0;
   for (int k = 0; k < n; ++k) ss += (t[k] - mean) * (t[k] - mean);
