@@ -2,6 +2,7 @@
 // sub-pixel step is in dense_subpixel.cpp.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "../corners/simd.hpp"
@@ -72,16 +73,15 @@ void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv
                              const cv::Mat& valid_right) {
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
   update_spans(valid_left);
-  spline_rows(right, valid_right);
+  prepare_right(right, valid_right);
   integer_stage(left, right);
-  match_at(r_, left, right, valid_left, valid_right);
-  if (s_.max_radius > s_.radius) choose_radius(left, right, valid_left, valid_right);
+  match_at(r_, left, valid_left);
+  if (s_.max_radius > s_.radius) choose_radius(left, valid_left);
 }
 
-void RectifiedMatcher::match_at(int r, const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                                const cv::Mat& valid_right) {
+void RectifiedMatcher::match_at(int r, const cv::Mat& left, const cv::Mat& valid_left) {
   r_ = r;
-  refine(left, right, valid_left, valid_right);
+  refine(left, valid_left);
   validate(valid_left);
 }
 
@@ -91,8 +91,7 @@ void RectifiedMatcher::match_at(int r, const cv::Mat& left, const cv::Mat& right
 // window also spans more depth structure (Aloe's edges: fewer valid pixels, more bad ones), so
 // the larger radius must prove itself on the pair: more valid pixels by min_gain. No ground truth:
 // the valid count is what the validity tests (shift, sigma, residual, left-right, occlusion) pass.
-void RectifiedMatcher::choose_radius(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                                     const cv::Mat& valid_right) {
+void RectifiedMatcher::choose_radius(const cv::Mat& left, const cv::Mat& valid_left) {
   if (wait_ > 0) {
     --wait_;
     return;
@@ -106,7 +105,7 @@ void RectifiedMatcher::choose_radius(const cv::Mat& left, const cv::Mat& right, 
   while (step != 0) {
     const int from = r_;
     swap_result(alt_);  // alt_: this radius's result
-    match_at(from + step, left, right, valid_left, valid_right);
+    match_at(from + step, left, valid_left);
     const int larger = step > 0 ? counts_.valid : alt_.counts.valid;
     const int smaller = step > 0 ? alt_.counts.valid : counts_.valid;
     if ((larger > (1 + s_.min_gain) * smaller) != (step > 0)) {
@@ -130,8 +129,9 @@ void RectifiedMatcher::swap_result(Result& r) {
 }
 
 // The sub-pixel step's target (gather): every run of valid right pixels on its own, so that nothing
-// beyond the valid mask (the fold, the band's empty columns) reaches a coefficient.
-void RectifiedMatcher::spline_rows(const cv::Mat& right, const cv::Mat& valid_right) {
+// beyond the valid mask (the fold, the band's empty columns) reaches a coefficient; and the pixels
+// whose four cubic taps all lie inside that mask.
+void RectifiedMatcher::prepare_right(const cv::Mat& right, const cv::Mat& valid_right) {
   for (int y = 0; y < h_; ++y) {
     const float* r = right.ptr<float>(y);
     const std::uint8_t* v = valid_right.ptr<std::uint8_t>(y);
@@ -147,6 +147,25 @@ void RectifiedMatcher::spline_rows(const cv::Mat& right, const cv::Mat& valid_ri
       if (end - x >= 2) bspline_coefficients_line(r + x, end - x, out + x);
       x = end;
     }
+  }
+  // The taps' test 16 pixels at a time (SSE2 vectors): as a plain loop its four branches per pixel
+  // were most of the ~3 M instructions a pair the sub-pixel step's two masks cost.
+  using VB16 = std::uint8_t __attribute__((vector_size(16)));
+  for (int y = 0; y < h_; ++y) {
+    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
+    std::uint8_t* ok = taps_ok_.data() + static_cast<std::size_t>(y) * w_;
+    auto one = [&](int x) {
+      ok[x] = x >= 1 && x + 2 < w_ && vr[x - 1] && vr[x] && vr[x + 1] && vr[x + 2] ? 1 : 0;
+    };
+    int x = 0;
+    for (; x < std::min(1, w_); ++x) one(x);
+    for (; x + 18 <= w_; x += 16) {  // taps x - 1 .. x + 17 inside the row
+      VB16 t[4];
+      for (int k = 0; k < 4; ++k) std::memcpy(&t[k], vr + x - 1 + k, sizeof t[k]);
+      const VB16 all = reinterpret_cast<VB16>((t[0] != 0) & (t[1] != 0) & (t[2] != 0) & (t[3] != 0)) & 1;
+      std::memcpy(ok + x, &all, sizeof all);
+    }
+    for (; x < w_; ++x) one(x);
   }
 }
 

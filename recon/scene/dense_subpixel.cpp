@@ -44,7 +44,7 @@ void each4(const Spans& sp, F&& f) {
 
 }  // namespace
 
-void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat&, const cv::Mat&, bool last) {
+void RectifiedMatcher::gather(const cv::Mat& left, bool last) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   float* ch = chan_.data();
   dense_simd::GatherRow g{};
@@ -67,8 +67,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, const cv::Mat&, const cv::Mat
     dense_simd::box_sum(avx2_, ch + k * n, sums_.data() + k * n, scratch_.data(), sp, r_);
 }
 
-void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                              const cv::Mat& valid_right) {
+void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& valid_left) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
   // Centre both images on the left's mean: the window sums stay small against float precision.
   double sum = 0;
@@ -83,10 +82,9 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
       }
   }
   mean_ = count > 0 ? sum / static_cast<double>(count) : 0.0;
-  // Both per-pixel masks below 4 or 16 pixels at a time (SSE2 vectors): as plain loops they cost
-  // ~3 M instructions a pair, the tap test's four branches per pixel most of it.
+  // The start 4 pixels at a time (SSE2 vectors; the tap test's mask likewise, prepare_right): as
+  // plain loops both cost ~3 M instructions a pair, the tap test's four branches per pixel most of it.
   using VB4 = std::uint8_t __attribute__((vector_size(4)));
-  using VB16 = std::uint8_t __attribute__((vector_size(16)));
   using VF = simd::V4;
   using VI = simd::VI4;
   for (int y = 0; y < h_; ++y) {
@@ -102,29 +100,12 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& right, const c
     }
     for (; x < w_; ++x) d[x] = vl[x] ? sg[x] : kNoMatch;
   }
-  // Right pixels whose four cubic taps all lie inside the right's valid domain (gather's test).
-  for (int y = 0; y < h_; ++y) {
-    const std::uint8_t* vr = valid_right.ptr<std::uint8_t>(y);
-    std::uint8_t* ok = taps_ok_.data() + static_cast<std::size_t>(y) * w_;
-    auto one = [&](int x) {
-      ok[x] = x >= 1 && x + 2 < w_ && vr[x - 1] && vr[x] && vr[x + 1] && vr[x + 2] ? 1 : 0;
-    };
-    int x = 0;
-    for (; x < std::min(1, w_); ++x) one(x);
-    for (; x + 18 <= w_; x += 16) {  // taps x - 1 .. x + 17 inside the row
-      VB16 t[4];
-      for (int k = 0; k < 4; ++k) std::memcpy(&t[k], vr + x - 1 + k, sizeof t[k]);
-      const VB16 all = reinterpret_cast<VB16>((t[0] != 0) & (t[1] != 0) & (t[2] != 0) & (t[3] != 0)) & 1;
-      std::memcpy(ok + x, &all, sizeof all);
-    }
-    for (; x < w_; ++x) one(x);
-  }
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken
   float* msolved = chan_.data() + 5 * n;
   const Spans sp{span_lo_.data(), span_hi_.data(), w_, h_};
   for (int it = 0; it < s_.iterations; ++it) {
-    gather(left, right, valid_right, it + 1 == s_.iterations);
+    gather(left, it + 1 == s_.iterations);
     // Only the last iteration's fit is read after the loop (validate(), correlation()): a window that
     // survives it is refitted there, one that fails it has no disparity.
     const bool last = it + 1 == s_.iterations;

@@ -142,11 +142,9 @@ class RectifiedMatcher {
  private:
   void integer_stage(const cv::Mat& left, const cv::Mat& right);
   // refine() and validate() at radius r (r_ := r).
-  void match_at(int r, const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                const cv::Mat& valid_right);
+  void match_at(int r, const cv::Mat& left, const cv::Mat& valid_left);
   // The per-pair choice of the window (MatcherSettings::grow_share; dense_radius.cpp).
-  void choose_radius(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-                     const cv::Mat& valid_right);
+  void choose_radius(const cv::Mat& left, const cv::Mat& valid_left);
   // One pair's results, kept while another radius is tried (swapped, never copied or allocated).
   struct Result {
     cv::Mat disp, sigma;
@@ -155,15 +153,16 @@ class RectifiedMatcher {
     int marginal = 0;
   };
   void swap_result(Result& r);
-  void refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
-              const cv::Mat& valid_right);
+  void refine(const cv::Mat& left, const cv::Mat& valid_left);
   void validate(const cv::Mat& valid_left);
-  void gather(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_right, bool last);
+  void gather(const cv::Mat& left, bool last);
   void correlation(const cv::Mat& valid_left);
   void reference_detail();
   const float* window_detail();
   void update_spans(const cv::Mat& valid_left);
-  void spline_rows(const cv::Mat& right, const cv::Mat& valid_right);
+  // What the sub-pixel step reads of the right image, once per pair whatever the radii tried: its
+  // rows' B-spline coefficients (right_spline_) and the taps' validity (taps_ok_).
+  void prepare_right(const cv::Mat& right, const cv::Mat& valid_right);
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
   int bin_of(const float f[2]) const;
