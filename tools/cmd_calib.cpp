@@ -13,6 +13,7 @@
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/recon/camera/domain_report.hpp"
 #include "naneye/recon/camera/rig_validate.hpp"
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -48,6 +49,32 @@ void print_calibration_text(const nlohmann::json& j) {
   }
   std::cout << "rig\n  baseline           " << j["rig"]["baseline_mm"].get<double>() << " mm\n"
             << "  rotation           " << j["rig"]["rotation_deg"].get<double>() << " deg\n";
+  const auto print_axis = [](const nlohmann::json& on_axis) {
+    for (const auto& p : on_axis)
+      std::cout << "  Z " << p["z_mm"].get<double>() << " mm    " << p["sigma_mm"].get<double>() << " mm ("
+                << 100.0 * p["sigma_mm"].get<double>() / p["z_mm"].get<double>() << " %)\n";
+  };
+  if (!j["calibration_depth_sigma"].is_null()) {
+    std::cout << "depth sigma the calibration allows (its covariance; on the left optical axis)\n";
+    print_axis(j["calibration_depth_sigma"]["on_axis"]);
+    return;
+  }
+  std::cout << "depth sigma the calibration allows: unknown (no calibration_covariance in the file; "
+               "`naneye calibrate` writes one)\n";
+  if (j["calibration_depth_sigma_if_independent"].is_null()) return;
+  std::cout << "  what-if, its *_sigma entries taken as independent (their correlations are not known, "
+               "so this is no bound either way):\n";
+  print_axis(j["calibration_depth_sigma_if_independent"]["on_axis"]);
+}
+
+// What the calibration's own uncertainty allows a depth (geometry/calibration_uncertainty.hpp), on
+// the left optical axis over the scene paths' range.
+nlohmann::json on_axis_json(const std::optional<recon::CalibrationUncertainty>& u) {
+  if (!u) return nullptr;
+  nlohmann::json points = nlohmann::json::array();
+  for (double z : {10.0, 20.0, 40.0, 70.0})
+    points.push_back({{"z_mm", z}, {"sigma_mm", u->depth_sigma_mm(Eigen::Vector3d(0.0, 0.0, z))}});
+  return {{"on_axis", points}};
 }
 
 }  // namespace
@@ -84,6 +111,9 @@ void add_calib_commands(CLI::App& app) {
                 {"right_center_mm", {C.x(), C.y(), C.z()}},
                 {"baseline_mm", rig.baseline_mm()},
                 {"rotation_deg", rig.rotation_angle_rad() * 180.0 / M_PI}};
+    j["calibration_depth_sigma"] = on_axis_json(recon::CalibrationUncertainty::of(rig));
+    j["calibration_depth_sigma_if_independent"] =
+        on_axis_json(recon::CalibrationUncertainty::assuming_independent_sigmas(rig));
     if (*json)
       std::cout << j.dump(2) << "\n";
     else

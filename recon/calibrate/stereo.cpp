@@ -134,6 +134,17 @@ void fill_result(const Solution& sol, const Layout& layout, std::span<const Cali
   const Eigen::Vector3d om = rodrigues(sol.state.Rs);
   rig.sigmas.om = cov_om.diagonal().cwiseMax(0.0).cwiseSqrt();
   rig.sigmas.T = cov.block<3, 3>(layout.pose + 3, layout.pose + 3).diagonal().cwiseMax(0.0).cwiseSqrt();
+  // The full covariance in rig.hpp's order (the marginals above are its diagonal): the bundle's
+  // columns mapped by a 24 x k selection, the rotation's local w through d(om)/d(w).
+  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(kCalibrationParameters, k);
+  for (int eye = 0; eye < 2; ++eye)
+    for (int j = 0; j < bundle::kIntrinsics; ++j)
+      if (layout.index[eye][j] >= 0)
+        map((eye == 0 ? kCalibrationLeft : kCalibrationRight) + j, layout.index[eye][j]) = 1.0;
+  map.block<3, 3>(kCalibrationOm, layout.pose) = Dom;
+  map.block<3, 3>(kCalibrationT, layout.pose + 3).setIdentity();
+  const Eigen::MatrixXd full = map * cov * map.transpose();
+  rig.sigmas.covariance = CalibrationCovariance(0.5 * (full + full.transpose()));  // symmetric to the bit
   const char* axes[3] = {"x", "y", "z"};
   for (int a = 0; a < 3; ++a)
     out.parameters.push_back({std::string("om.") + axes[a], om(a), (*rig.sigmas.om)(a)});

@@ -1,5 +1,6 @@
 #include "naneye/recon/camera/calibration_io.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <array>
 #include <cmath>
@@ -179,6 +180,35 @@ bool optional_sigma(const Keys& keys, const std::string& key,
   return true;
 }
 
+// The optional full covariance (kCalibrationParameters square, rig.hpp's order): refused unless it
+// is symmetric and positive semi-definite to rounding, since a point's calibration sigma is a
+// quadratic form in it and would otherwise come out negative or complex.
+bool optional_covariance(const Keys& keys, std::optional<CalibrationCovariance>& out) {
+  const std::string key = "calibration_covariance";
+  const Entry* e = keys.find(key);
+  if (!e) return true;
+  Refusal& r = keys.refusal();
+  auto m = to_eigen<kCalibrationParameters, kCalibrationParameters>(r, *e, key);
+  if (!m) return false;
+  const double scale = m->cwiseAbs().maxCoeff();
+  if ((*m - m->transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) {
+    refuse(r, e->file, key, "not symmetric");
+    return false;
+  }
+  const CalibrationCovariance sym = 0.5 * (*m + m->transpose());
+  const double smallest = Eigen::SelfAdjointEigenSolver<CalibrationCovariance>(sym).eigenvalues().minCoeff();
+  // 1e-9 of the largest entry: the eigen-solver's own rounding on a matrix whose entries span
+  // ~12 decades (k3's variance against om's), far below any real negative direction.
+  if (smallest < -1e-9 * scale) {
+    std::ostringstream s;
+    s << "not positive semi-definite (smallest eigenvalue " << smallest << ")";
+    refuse(r, e->file, key, s.str());
+    return false;
+  }
+  out = sym;
+  return true;
+}
+
 // The whole file, refused once it is past what read_calibration_yaml takes (a pipe has no size
 // to ask for, so it is read as it comes).
 std::string read_text(const std::filesystem::path& path) {
@@ -261,7 +291,8 @@ RigOrRefusal try_parse_rig(const std::vector<CalibrationText>& texts) {
   auto& s = rig.sigmas;
   if (!optional_sigma<3, 3>(keys, "M1_sigma", s.M1) || !optional_sigma<3, 3>(keys, "M2_sigma", s.M2) ||
       !optional_sigma<5, 1>(keys, "D1_sigma", s.D1) || !optional_sigma<5, 1>(keys, "D2_sigma", s.D2) ||
-      !optional_sigma<3, 1>(keys, "om_sigma", s.om) || !optional_sigma<3, 1>(keys, "T_sigma", s.T))
+      !optional_sigma<3, 1>(keys, "om_sigma", s.om) || !optional_sigma<3, 1>(keys, "T_sigma", s.T) ||
+      !optional_covariance(keys, s.covariance))
     return refused();
   out.rig = std::move(rig);
   return out;
@@ -295,6 +326,12 @@ void save_rig(const StereoRig& rig, const std::filesystem::path& file) {
   if (s.D2) put("D2_sigma", Eigen::Matrix<double, 1, 5>(s.D2->transpose()));
   if (s.om) put("om_sigma", *s.om);
   if (s.T) put("T_sigma", *s.T);
+  if (s.covariance) {
+    fs.writeComment(
+        "The calibration's covariance; rows and columns: left fx fy cx cy k1 k2 p1 p2 k3, right the same, "
+        "om (3), T (3, mm). Fixed parameters have zero rows.");
+    put("calibration_covariance", *s.covariance);
+  }
 }
 
 }  // namespace naneye::recon

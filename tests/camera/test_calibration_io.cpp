@@ -97,6 +97,43 @@ TEST_F(CalibFiles, SaveLoadRoundTripIsExact) {
   EXPECT_EQ(*back.sigmas.D1, *rig.sigmas.D1);
 }
 
+// The full covariance naneye's calibration writes (rig.hpp's order) reads back to the bit, and a
+// matrix that cannot be a covariance (asymmetric, a negative direction) is refused by name: a
+// point's calibration sigma is a quadratic form in it.
+TEST_F(CalibFiles, CovarianceRoundTripsAndMustBeACovariance) {
+  auto rig = load_rig(kDefault);
+  EXPECT_FALSE(rig.sigmas.covariance);  // the paper gives marginal sigmas only
+  Eigen::Matrix<double, naneye::recon::kCalibrationParameters, naneye::recon::kCalibrationParameters + 3> A;
+  for (int i = 0; i < A.size(); ++i) A(i) = std::sin(1.0 + 0.37 * i) * std::pow(10.0, -(i % 5));
+  const naneye::recon::CalibrationCovariance cov = A * A.transpose();
+  rig.sigmas.covariance = cov;
+  const fs::path out = dir_ / "saved.yaml";
+  naneye::recon::save_rig(rig, out);
+  const auto back = load_rig(out);
+  ASSERT_TRUE(back.sigmas.covariance);
+  EXPECT_EQ(*back.sigmas.covariance, cov);
+
+  std::ifstream in(out);
+  const std::string saved((std::istreambuf_iterator<char>(in)), {});
+  const auto with = [&](const naneye::recon::CalibrationCovariance& m) {
+    std::string text = saved;
+    const auto at = text.find("calibration_covariance:");
+    text.erase(at);
+    cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
+    cv::Mat cm;
+    cv::eigen2cv(Eigen::MatrixXd(m), cm);
+    fs << "calibration_covariance" << cm;
+    const std::string extra = fs.releaseAndGetString();
+    return write("variant.yaml", text + extra.substr(extra.find("calibration_covariance:")));
+  };
+  naneye::recon::CalibrationCovariance asym = cov;
+  asym(0, 5) += 1e-3 * cov.cwiseAbs().maxCoeff();
+  expect_refused(with(asym), {"variant.yaml", "'calibration_covariance'", "not symmetric"});
+  naneye::recon::CalibrationCovariance negative = cov;
+  negative(3, 3) = -negative(3, 3);
+  expect_refused(with(negative), {"'calibration_covariance'", "not positive semi-definite"});
+}
+
 TEST_F(CalibFiles, IntrinsicsAndExtrinsicsInTwoFiles) {
   const auto pos = text_.find("R: !!opencv-matrix");
   const auto sig = text_.find("# One-sigma");

@@ -11,12 +11,23 @@
 
 namespace naneye::recon {
 
-// One-sigma uncertainties that a calibration may carry (the *_sigma entries of the YAML file).
+// The calibration's parameters in the order of its covariance (the YAML's `calibration_covariance`):
+// per eye (left, then right) fx, fy, cx, cy, k1, k2, p1, p2, k3 (K's skew is not a parameter), then
+// the Rodrigues vector om of R and T (mm). A fixed parameter has zero rows and columns.
+inline constexpr int kCalibrationParameters = 24;
+inline constexpr int kCalibrationLeft = 0, kCalibrationRight = 9, kCalibrationOm = 18, kCalibrationT = 21;
+using CalibrationCovariance = Eigen::Matrix<double, kCalibrationParameters, kCalibrationParameters>;
+
+// One-sigma uncertainties that a calibration may carry (the *_sigma entries of the YAML file) and,
+// from naneye's own calibration, the full covariance they are the marginals of: the distortion
+// terms and the focal lengths are strongly correlated, so what the calibration allows a point
+// (geometry/calibration_uncertainty.hpp) needs the full matrix, not the sigmas alone.
 struct CalibrationSigmas {
   std::optional<Eigen::Matrix3d> M1, M2;  // per entry of K
   std::optional<Eigen::Matrix<double, 5, 1>> D1, D2;
   std::optional<Eigen::Vector3d> om;  // Rodrigues vector of R
   std::optional<Eigen::Vector3d> T;
+  std::optional<CalibrationCovariance> covariance;
 };
 
 struct StereoRig {
