@@ -58,6 +58,15 @@ void print_odd_even(const recon::OddEvenValidation& v) {
                 c.combined_sigma, c.ratio);
   }
   std::printf("  RMS of the ratios: %.2f (about 1 when the sigmas are honest)\n", v.ratio_rms);
+  if (v.depth_corners == 0) return;
+  std::printf(
+      "  depth of the %d corners both eyes saw, triangulated with each half: median |odd - even| %.3f %% of "
+      "Z,\n"
+      "  median combined calibration sigma %.3f %% of Z, RMS of the ratios %.2f (about 1 when the depth "
+      "sigma "
+      "is honest)\n",
+      v.depth_corners, 100.0 * v.depth_median_relative, 100.0 * v.depth_sigma_median_relative,
+      v.depth_ratio_rms);
 }
 
 }  // namespace
@@ -110,6 +119,10 @@ nlohmann::json report_json(const recon::CalibrationResult& res, const CollectedV
     o["ok"] = odd_even->ok;
     o["message"] = odd_even->message;
     o["ratio_rms"] = odd_even->ratio_rms;
+    o["depth"] = {{"corners", odd_even->depth_corners},
+                  {"ratio_rms", odd_even->depth_ratio_rms},
+                  {"median_relative_difference", odd_even->depth_median_relative},
+                  {"median_relative_combined_sigma", odd_even->depth_sigma_median_relative}};
     for (const auto& c : odd_even->parameters)
       o["parameters"].push_back({{"name", c.name},
                                  {"odd", c.odd},

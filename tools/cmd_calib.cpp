@@ -55,7 +55,8 @@ void print_calibration_text(const nlohmann::json& j) {
                 << 100.0 * p["sigma_mm"].get<double>() / p["z_mm"].get<double>() << " %)\n";
   };
   if (!j["calibration_depth_sigma"].is_null()) {
-    std::cout << "depth sigma the calibration allows (its covariance; on the left optical axis)\n";
+    std::cout << "depth sigma the calibration allows (its covariance; on the left optical axis, 10 to 70 "
+                 "baselines)\n";
     print_axis(j["calibration_depth_sigma"]["on_axis"]);
     return;
   }
@@ -68,12 +69,21 @@ void print_calibration_text(const nlohmann::json& j) {
 }
 
 // What the calibration's own uncertainty allows a depth (geometry/calibration_uncertainty.hpp), on
-// the left optical axis over the scene paths' range.
-nlohmann::json on_axis_json(const std::optional<recon::CalibrationUncertainty>& u) {
+// the left optical axis at 10, 20, 40 and 70 baselines (the NanEye's 11-76 mm, the scene paths'
+// range), where the right eye sees that point.
+nlohmann::json on_axis_json(const recon::StereoRig& rig,
+                            const std::optional<recon::CalibrationUncertainty>& u) {
   if (!u) return nullptr;
   nlohmann::json points = nlohmann::json::array();
-  for (double z : {10.0, 20.0, 40.0, 70.0})
-    points.push_back({{"z_mm", z}, {"sigma_mm", u->depth_sigma_mm(Eigen::Vector3d(0.0, 0.0, z))}});
+  for (double baselines : {10.0, 20.0, 40.0, 70.0}) {
+    const Eigen::Vector3d X(0.0, 0.0, baselines * rig.baseline_mm());
+    const Eigen::Vector2d pr = rig.right.project(Eigen::Vector3d(rig.R * X + rig.T));
+    if (!(pr.x() >= 0 && pr.y() >= 0 && pr.x() <= rig.right.width() - 1 &&
+          pr.y() <= rig.right.height() - 1) ||
+        !rig.right.in_domain(pr))
+      continue;
+    points.push_back({{"z_mm", X.z()}, {"sigma_mm", u->depth_sigma_mm(X)}});
+  }
   return {{"on_axis", points}};
 }
 
@@ -111,9 +121,9 @@ void add_calib_commands(CLI::App& app) {
                 {"right_center_mm", {C.x(), C.y(), C.z()}},
                 {"baseline_mm", rig.baseline_mm()},
                 {"rotation_deg", rig.rotation_angle_rad() * 180.0 / M_PI}};
-    j["calibration_depth_sigma"] = on_axis_json(recon::CalibrationUncertainty::of(rig));
+    j["calibration_depth_sigma"] = on_axis_json(rig, recon::CalibrationUncertainty::of(rig));
     j["calibration_depth_sigma_if_independent"] =
-        on_axis_json(recon::CalibrationUncertainty::assuming_independent_sigmas(rig));
+        on_axis_json(rig, recon::CalibrationUncertainty::assuming_independent_sigmas(rig));
     if (*json)
       std::cout << j.dump(2) << "\n";
     else

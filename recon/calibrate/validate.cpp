@@ -7,6 +7,7 @@
 #include <random>
 
 #include "naneye/recon/calibrate/calibrate.hpp"
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/metrics.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 
@@ -108,6 +109,42 @@ SplitValidation cross_validate_splits(std::span<const CalibrationView> views, co
   return out;
 }
 
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+void compare_depths(std::span<const CalibrationView> views, OddEvenValidation& out) {
+  const auto odd = CalibrationUncertainty::of(out.odd.rig), even = CalibrationUncertainty::of(out.even.rig);
+  if (!odd || !even) return;
+  double sum = 0;
+  std::vector<double> relative, sigma_relative;
+  for (const CalibrationView& v : views)
+    for (const BoardCorner& l : v.left)
+      for (const BoardCorner& r : v.right) {
+        if (r.row != l.row || r.col != l.col) continue;
+        const Triangulated a = triangulate(out.odd.rig, l.px, r.px, TriangulationMethod::refined, 0.0);
+        const Triangulated b = triangulate(out.even.rig, l.px, r.px, TriangulationMethod::refined, 0.0);
+        if (!a.ok() || !b.ok()) continue;
+        const double dz = a.X.z() - b.X.z(), z = 0.5 * (a.X.z() + b.X.z());
+        const double combined = std::hypot(odd->depth_sigma_mm(a.X), even->depth_sigma_mm(b.X));
+        sum += (dz / combined) * (dz / combined);
+        relative.push_back(std::abs(dz) / z);
+        sigma_relative.push_back(combined / z);
+      }
+  out.depth_corners = static_cast<int>(relative.size());
+  if (relative.empty()) return;
+  out.depth_ratio_rms = std::sqrt(sum / static_cast<double>(relative.size()));
+  out.depth_median_relative = median(relative);
+  out.depth_sigma_median_relative = median(sigma_relative);
+}
+
+}  // namespace
+
 OddEvenValidation cross_validate_odd_even(std::span<const CalibrationView> views, const BoardGeometry& board,
                                           const CalibrationSettings& settings) {
   OddEvenValidation out;
@@ -140,6 +177,7 @@ OddEvenValidation cross_validate_odd_even(std::span<const CalibrationView> views
     out.parameters.push_back(c);
   }
   out.ratio_rms = free ? std::sqrt(sum / free) : 0.0;
+  compare_depths(views, out);
   out.ok = true;
   return out;
 }

@@ -24,6 +24,14 @@ TEST(CalibInfo, Dataset3Json) {
   EXPECT_NEAR(j["rig"]["baseline_mm"].get<double>(), 1.0886, 1e-4);
   EXPECT_NEAR(j["rig"]["rotation_deg"].get<double>(), 2.108, 1e-3);
   EXPECT_DOUBLE_EQ(j["left"]["D"][0].get<double>(), -0.369);
+  // The paper gives marginal sigmas only: no depth sigma to stand behind, the independent what-if
+  // beside it (all four depths seen by the right eye on this rig).
+  EXPECT_TRUE(j["calibration_depth_sigma"].is_null());
+  const auto& what_if = j["calibration_depth_sigma_if_independent"]["on_axis"];
+  ASSERT_EQ(what_if.size(), 4u);
+  EXPECT_NEAR(what_if[0]["z_mm"].get<double>(), 10 * 1.0886, 1e-3);
+  for (std::size_t i = 1; i < what_if.size(); ++i)
+    EXPECT_GT(what_if[i]["sigma_mm"].get<double>(), what_if[i - 1]["sigma_mm"].get<double>());
 }
 
 TEST(CalibInfo, BadFileIsAClearError) {

@@ -72,6 +72,21 @@ TEST(CalibratePhotographs, OpenCvSampleSetLeftFxWithinOnePercentOfOpenCvs) {
   EXPECT_EQ(j["pairs"].get<int>(), 13);
   EXPECT_LE(std::abs(fx - cv_fx), 0.01 * cv_fx);
   EXPECT_LT(rms, 0.39);
+  // The file carries the calibration's covariance, so `calib info` gives the depth sigma it allows,
+  // growing with depth (at 10 baselines ~0.08 %, docs/scene.md "Calibration uncertainty").
+  const auto info = naneye::test::run_cli("calib info --json " + out);
+  ASSERT_EQ(info.exit_code, 0) << info.out;
+  const auto ji = nlohmann::json::parse(info.out);
+  const auto& on_axis = ji["calibration_depth_sigma"]["on_axis"];
+  ASSERT_GE(on_axis.size(), 2u) << info.out;
+  for (std::size_t i = 0; i < on_axis.size(); ++i) {
+    const double rel = on_axis[i]["sigma_mm"].get<double>() / on_axis[i]["z_mm"].get<double>();
+    EXPECT_GT(rel, 1e-4);
+    EXPECT_LT(rel, 0.05);
+    if (i) {
+      EXPECT_GT(on_axis[i]["sigma_mm"].get<double>(), on_axis[i - 1]["sigma_mm"].get<double>());
+    }
+  }
   std::filesystem::remove(out);
 }
 

@@ -134,6 +134,14 @@ struct OddEvenValidation {
   std::vector<ParameterComparison> parameters;
   // RMS of ratio over the free parameters: ~1 when the sigmas are honest.
   double ratio_rms = 0;
+  // The same test on what a user measures: every corner both eyes saw in any view, triangulated
+  // (refined) with each half's rig; |Z_odd - Z_even| against sqrt(s_odd^2 + s_even^2), s the depth
+  // sigma each rig's covariance allows (geometry/calibration_uncertainty.hpp). The corners of a
+  // view share much of their error: this is a few views' worth of evidence, not thousands.
+  int depth_corners = 0;
+  double depth_ratio_rms = 0;              // ~1 when the calibration's depth sigma is honest
+  double depth_median_relative = 0;        // median |Z_odd - Z_even| / Z
+  double depth_sigma_median_relative = 0;  // median sqrt(s_odd^2 + s_even^2) / Z
 };
 
 OddEvenValidation cross_validate_odd_even(std::span<const CalibrationView> views, const BoardGeometry& board,
