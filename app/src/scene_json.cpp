@@ -22,10 +22,13 @@ nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::opt
       q["right_px"] = {p.right_px.x(), p.right_px.y()};
       q["xyz_mm"] = {p.X.x(), p.X.y(), p.X.z()};
       q["depth_sigma_mm"] = p.depth_sigma_mm;
+      q["calib_sigma_mm"] =
+          std::isfinite(p.calib_sigma_mm) ? nlohmann::json(p.calib_sigma_mm) : nlohmann::json(nullptr);
     } else {
       q["right_px"] = nullptr;
       q["xyz_mm"] = nullptr;
       q["depth_sigma_mm"] = nullptr;
+      q["calib_sigma_mm"] = nullptr;
     }
     points.push_back(std::move(q));
   }

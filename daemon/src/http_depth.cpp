@@ -6,12 +6,21 @@
 #include "naneye/app/result_json.hpp"
 #include "naneye/base/clock.hpp"
 #include "naneye/daemon/depth_at.hpp"
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 
 namespace naneye::daemon::http {
 namespace {
 
 double age_ms(const Published& p) {
   return static_cast<double>(base::monotonic_ns() - p.published_ns) * 1e-6;
+}
+
+// The depth sigma the calibration allows at X: systematic, common to every depth of the pair (so
+// not to be averaged away); null when the calibration file carries no covariance (the paper's
+// files: marginal sigmas only, docs/scene.md "Calibration uncertainty").
+nlohmann::json calibration_sigma_json(const recon::StereoRig& rig, const Eigen::Vector3d& X) {
+  const auto u = recon::CalibrationUncertainty::of(rig);
+  return u ? nlohmann::json(u->depth_sigma_mm(X)) : nlohmann::json(nullptr);
 }
 
 void no_result(httplib::Response& res) {
@@ -87,6 +96,7 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
         body["xyz_mm"] = {dense.xyz_mm.x(), dense.xyz_mm.y(), dense.xyz_mm.z()};
         body["depth_mm"] = dense.depth_mm;
         body["depth_sigma_mm"] = dense.depth_sigma_mm;
+        body["calib_sigma_mm"] = calibration_sigma_json(*rig, dense.xyz_mm);
         body["range_mm"] = dense.range_mm;
         return send_json(res, body);
       }
@@ -116,6 +126,7 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
     body["xyz_mm"] = {d.xyz_mm.x(), d.xyz_mm.y(), d.xyz_mm.z()};
     body["depth_mm"] = d.depth_mm;
     body["depth_sigma_mm"] = d.depth_sigma_mm;
+    body["calib_sigma_mm"] = calibration_sigma_json(*rig, d.xyz_mm);
     body["range_mm"] = d.range_mm;
     body["board_xy_mm"] = {d.board_xy_mm.x(), d.board_xy_mm.y()};
     send_json(res, body);

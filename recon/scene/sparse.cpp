@@ -91,6 +91,7 @@ const char* to_string(PointStatus s) {
 
 SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSettings& s)
     : rig_(rig),
+      calib_(CalibrationUncertainty::of(rig)),
       s_(s),
       detector_(rig.left.width(), rig.left.height(), s.features),
       ids_(rig.left.width(), rig.left.height(), s.max_features, s.ids) {
@@ -218,6 +219,7 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
       p.status = PointStatus::imprecise;
       p.X.setConstant(std::numeric_limits<double>::quiet_NaN());
     }
+    if (p.valid() && calib_) p.calib_sigma_mm = calib_->depth_sigma_mm(p.X);
     out.valid_count += p.valid();
   }
   const std::span<std::int64_t> ids(id_scratch_.data(), tried);

@@ -32,10 +32,13 @@ class NaneyedTest : public ::testing::Test {
   }
   CaptureTruth truth;
 
+  // The calibration file the config names (a test may write its own first).
+  std::string calibration = calib_path();
+
   // Writes a config with `extra` appended and starts naneyed on it with `args`.
   void start(const std::string& extra, std::vector<std::string> args = {}) {
     const auto cfg = dir.path / "naneyed.toml";
-    std::ofstream(cfg) << "[calibration]\npath = \"" << calib_path()
+    std::ofstream(cfg) << "[calibration]\npath = \"" << calibration
                        << "\"\n[http]\nhost = \"127.0.0.1\"\nport = 0\n"
                        << extra
                        // These tests exercise the service (timing, streaming, endpoints) on captures

@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneyed_fixture.hpp"
 #include "scene_capture.hpp"
 
@@ -49,8 +50,11 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
   int counted = 0, unseen = 0;
   double rel2 = 0;
   for (const auto& p : sc["points"]) {
-    for (const char* k : {"id", "left_px", "right_px", "xyz_mm", "depth_sigma_mm", "valid", "status"})
+    for (const char* k :
+         {"id", "left_px", "right_px", "xyz_mm", "depth_sigma_mm", "calib_sigma_mm", "valid", "status"})
       EXPECT_TRUE(p.contains(k)) << k;
+    // The paper's calibration has no covariance: no calibration sigma to stand behind.
+    EXPECT_TRUE(p["calib_sigma_mm"].is_null());
     if (!p["valid"].get<bool>()) continue;
     ++counted;
     const Eigen::Vector2d px(p["left_px"][0].get<double>(), p["left_px"][1].get<double>());
@@ -137,6 +141,7 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
       EXPECT_EQ(j["pair"], 1);
       EXPECT_EQ(j["map_px"][0], u);
       EXPECT_GT(j["depth_sigma_mm"].get<double>(), 0.0);
+      EXPECT_TRUE(j["calib_sigma_mm"].is_null());
       EXPECT_NEAR(stored, std::round(j["depth_mm"].get<double>() * 100), 0.5);
       if (const auto truth =
               scene_renderer(false).truth_depth_at(test_scene(1).surface, Eigen::Vector2d(u, v))) {
@@ -164,6 +169,49 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
     for (int u = 0; u < 250; u += 25)
       EXPECT_EQ(c.at<cv::Vec3b>(v, u) == cv::Vec3b(0, 0, 0), z16.at<std::uint16_t>(v, u) == 0)
           << u << "," << v;
+}
+
+// A calibration that carries its covariance (as `naneye calibrate` writes it): every valid scene
+// point and every /v1/depth/at answer also gives the depth sigma the calibration allows there.
+TEST_F(NaneyedTest, SceneAnswersCarryTheCalibrationSigmaWhenTheFileHasACovariance) {
+  naneye::recon::StereoRig rig = naneye::recon::load_rig(calibration);
+  rig.sigmas.covariance =
+      naneye::recon::CalibrationUncertainty::assuming_independent_sigmas(rig)->covariance();
+  calibration = (dir.path / "with-covariance.yaml").string();
+  naneye::recon::save_rig(rig, calibration);
+  const auto u = naneye::recon::CalibrationUncertainty::of(naneye::recon::load_rig(calibration));
+  ASSERT_TRUE(u.has_value());
+  const auto file = dir.path / "sphere.raw";
+  write_scene_capture(file, 1);
+  serve_replay(file, 1, "[board]\ntracking = true\n[recon]\nmode = \"scene\"\n", true);
+  const auto d = get_json("/v1/depth");
+  ASSERT_TRUE(d.contains("scene")) << d.dump().substr(0, 400) << "\n" << daemon->log();
+  int given = 0;
+  for (const auto& p : d["scene"]["points"]) {
+    if (!p["valid"].get<bool>()) {
+      EXPECT_TRUE(p["calib_sigma_mm"].is_null());
+      continue;
+    }
+    const Eigen::Vector3d X(p["xyz_mm"][0].get<double>(), p["xyz_mm"][1].get<double>(),
+                            p["xyz_mm"][2].get<double>());
+    EXPECT_NEAR(p["calib_sigma_mm"].get<double>(), u->depth_sigma_mm(X), 1e-9 * u->depth_sigma_mm(X));
+    ++given;
+  }
+  EXPECT_GE(given, 300);
+  int answered = 0;
+  for (int v = 60; v < 200; v += 20)
+    for (int u_px = 60; u_px < 200; u_px += 20) {
+      const auto r =
+          client->Get(("/v1/depth/at?u=" + std::to_string(u_px) + "&v=" + std::to_string(v)).c_str());
+      ASSERT_TRUE(r);
+      if (r->status != 200) continue;
+      const auto j = nlohmann::json::parse(r->body);
+      const Eigen::Vector3d X(j["xyz_mm"][0].get<double>(), j["xyz_mm"][1].get<double>(),
+                              j["xyz_mm"][2].get<double>());
+      EXPECT_NEAR(j["calib_sigma_mm"].get<double>(), u->depth_sigma_mm(X), 1e-9 * u->depth_sigma_mm(X));
+      ++answered;
+    }
+  EXPECT_GT(answered, 10);
 }
 
 TEST_F(NaneyedTest, BoardModeHasNoSceneAndNoDepthMap) {

@@ -26,6 +26,8 @@ SparseFigures evaluate_sparse(const std::string& name, bool bayer, recon::scene:
   double rel2 = 0, z2 = 0;
   int inl = 0;
   for (const auto& q : res.points) {
+    // The paper's file has no covariance: no calibration sigma to give.
+    EXPECT_TRUE(std::isnan(q.calib_sigma_mm));
     if (!q.valid()) {
       EXPECT_TRUE(std::isnan(q.X.z()));
       continue;
@@ -85,6 +87,38 @@ TEST_P(SparseScene, AgainstTruth) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Presets, SparseScene, test::every_preset(), test::preset_case_name);
+
+// With a calibration that carries its covariance, every valid point also gets the depth sigma the
+// calibration allows there (CalibrationUncertainty at its X), and nothing else changes.
+TEST(SparseCalibrationSigma, GivenForEveryValidPointWhenTheCalibrationHasACovariance) {
+  recon::StereoRig rig = test::paper_d3();
+  const auto what_if = recon::CalibrationUncertainty::assuming_independent_sigmas(rig);
+  ASSERT_TRUE(what_if.has_value());
+  rig.sigmas.covariance = what_if->covariance();  // any covariance will do for the plumbing
+  const auto u = recon::CalibrationUncertainty::of(rig);
+  ASSERT_TRUE(u.has_value());
+  const auto& p = test::textured_pair("plane", false);
+  recon::scene::SparseResult with, without;
+  recon::scene::SparseReconstructor(rig).reconstruct(sim::raw_view(p.left, false),
+                                                     sim::raw_view(p.right, false), with);
+  recon::scene::SparseReconstructor(test::paper_d3())
+      .reconstruct(sim::raw_view(p.left, false), sim::raw_view(p.right, false), without);
+  ASSERT_EQ(with.points.size(), without.points.size());
+  EXPECT_GE(with.valid_count, 300);
+  for (std::size_t i = 0; i < with.points.size(); ++i) {
+    const auto &a = with.points[i], &b = without.points[i];
+    EXPECT_EQ(a.status, b.status);
+    EXPECT_EQ(a.id, b.id);
+    if (!a.valid()) {
+      EXPECT_TRUE(std::isnan(a.calib_sigma_mm));
+      continue;
+    }
+    EXPECT_EQ(a.right_px, b.right_px);
+    EXPECT_EQ(a.X, b.X);
+    EXPECT_EQ(a.depth_sigma_mm, b.depth_sigma_mm);
+    EXPECT_EQ(a.calib_sigma_mm, u->depth_sigma_mm(a.X));
+  }
+}
 
 // At a real NanEye's blur (edges 1.0-1.6 px, ../shared/notes/measurements.md; the presets are rendered
 // at 0.41 px) the far plane's texture is faint and a fifth of its points carry depth sigmas of 2-4 %:

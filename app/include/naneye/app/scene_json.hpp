@@ -1,7 +1,8 @@
 #pragma once
 // The "scene" object of issue 14 (docs/scene.md), one serializer for `naneye recon --scene` and
 // naneyed's /v1/depth so the two cannot drift apart:
-// {"points": [{"id", "left_px", "right_px", "xyz_mm", "depth_sigma_mm", "valid", "status"}],
+// {"points": [{"id", "left_px", "right_px", "xyz_mm", "depth_sigma_mm", "calib_sigma_mm", "valid",
+//              "status"}],
 //  "valid_points", "noise_sigma_dn",
 //  "depth": {"valid_share", "median_mm", "valid_pixels", "visible_pixels"} or null without a dense map}.
 #include <limits>

@@ -7,10 +7,12 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "naneye/recon/camera/rig.hpp"
 #include "naneye/recon/corners/detector.hpp"
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/scene/epipolar_match.hpp"
 #include "naneye/recon/scene/feature_ids.hpp"
 #include "naneye/recon/scene/features.hpp"
@@ -98,6 +100,10 @@ struct ScenePoint {
   Eigen::Vector2d left_px{0, 0}, right_px{0, 0};  // raw pixels (right: NaN unless matched)
   Eigen::Vector3d X = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());  // left frame, mm
   double depth_sigma_mm = std::numeric_limits<double>::quiet_NaN();
+  // The depth sigma the calibration allows at X (geometry/calibration_uncertainty.hpp): common to
+  // every point of the pair, so it does not shrink when points are averaged. NaN unless valid and
+  // the calibration carries its covariance.
+  double calib_sigma_mm = std::numeric_limits<double>::quiet_NaN();
   double zncc = 0;
   PointStatus status = PointStatus::no_candidates;
   bool valid() const { return status == PointStatus::ok; }
@@ -178,6 +184,7 @@ class SparseReconstructor {
                  const Eigen::Matrix2d& A0, const LkSettings& lks, const LkResult& narrow, double& hausman);
 
   StereoRig rig_;
+  std::optional<CalibrationUncertainty> calib_;  // empty: the calibration has no covariance
   SparseSettings s_;
   Eigen::Matrix3d R_lr_, R_rl_;
   Eigen::Vector3d T_lr_, T_rl_;
