@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 
 namespace {
@@ -248,8 +249,29 @@ void BM_Triangulate_RawPixels_Refined(benchmark::State& state) {
   state.counters["max_err_mm"] = worst;
 }
 
+// --- The depth sigma the calibration allows (geometry/calibration_uncertainty.hpp) ------------
+// Per point, beside the triangulation above: what a calib_sigma_mm costs a sparse point or a
+// /v1/depth/at answer, and what one per dense pixel would cost. The covariance is the marginals'
+// diagonal (any covariance costs the same).
+
+void BM_CalibrationDepthSigma(benchmark::State& state) {
+  const Data& d = data();
+  StereoRig rig = d.rig;
+  rig.sigmas.covariance =
+      naneye::recon::CalibrationUncertainty::assuming_independent_sigmas(rig)->covariance();
+  const auto u = naneye::recon::CalibrationUncertainty::of(rig);
+  std::vector<double> out(d.X.size());
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < d.X.size(); ++i) out[i] = u->depth_sigma_mm(d.X[i]);
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  set_per_point(state, d.X.size());
+}
+
 }  // namespace
 
+BENCHMARK(BM_CalibrationDepthSigma)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Undistort_Ours)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Undistort_OpenCV_Default)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Undistort_OpenCV_Count30_Eps1e6)->Unit(benchmark::kMillisecond);
