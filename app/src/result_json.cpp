@@ -1,5 +1,6 @@
 #include "naneye/app/result_json.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace naneye::app {
@@ -43,6 +44,8 @@ nlohmann::json result_to_json(const recon::PairResult& r) {
     o["right_px"] = vec(p.right_px);
     o["xyz_mm"] = p.valid ? vec(p.xyz_mm) : nlohmann::json(nullptr);
     o["depth_sigma_mm"] = p.valid ? nlohmann::json(p.depth_sigma_mm) : nlohmann::json(nullptr);
+    o["calib_sigma_mm"] = p.valid && std::isfinite(p.calib_sigma_mm) ? nlohmann::json(p.calib_sigma_mm)
+                                                                     : nlohmann::json(nullptr);
     o["xyz_board_mm"] = p.valid ? vec(p.xyz_board_mm) : nlohmann::json(nullptr);
     o["valid"] = p.valid;
     pts.push_back(std::move(o));
@@ -117,6 +120,9 @@ recon::PairResult result_from_json(const nlohmann::json& j) {
     if (p.valid) {
       p.xyz_mm = to_vec<3>(o.at("xyz_mm"));
       p.depth_sigma_mm = o.at("depth_sigma_mm").get<double>();
+      // Absent from results written before it existed; null without a calibration covariance.
+      if (const auto c = o.find("calib_sigma_mm"); c != o.end() && !c->is_null())
+        p.calib_sigma_mm = c->get<double>();
       p.xyz_board_mm = to_vec<3>(o.at("xyz_board_mm"));
     }
   }

@@ -1,4 +1,5 @@
 // /v1/depth, /v1/depth/at, /v1/points, /v1/points.ply.
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -149,6 +150,8 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
                        {"col", pt.col},
                        {"xyz_mm", {pt.xyz_mm.x(), pt.xyz_mm.y(), pt.xyz_mm.z()}},
                        {"depth_sigma_mm", pt.depth_sigma_mm},
+                       {"calib_sigma_mm", std::isfinite(pt.calib_sigma_mm) ? nlohmann::json(pt.calib_sigma_mm)
+                                                                           : nlohmann::json(nullptr)},
                        {"xyz_board_mm", {pt.xyz_board_mm.x(), pt.xyz_board_mm.y(), pt.xyz_board_mm.z()}}});
       }
       body["points"] = std::move(pts);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/metrics.hpp"
 
 namespace naneye::recon {
@@ -31,6 +32,7 @@ void reconstruct_pair(const StereoRig& rig, const BoardGeometry& b, const Recons
   pose.covariance *= sigma * sigma;
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto calib = CalibrationUncertainty::of(rig);  // empty without a covariance; no heap
   std::array<Eigen::Vector3d, kMaxCorners> grid;
   std::array<Eigen::Vector2d, kMaxCorners> pl, pr;
   grid.fill(Eigen::Vector3d::Constant(nan));
@@ -53,6 +55,7 @@ void reconstruct_pair(const StereoRig& rig, const BoardGeometry& b, const Recons
     p.valid = true;
     p.xyz_mm = t.X;
     p.depth_sigma_mm = t.depth_sigma_mm;
+    if (calib) p.calib_sigma_mm = calib->depth_sigma_mm(t.X);
     if (o.row >= 0 && o.row < b.rows && o.col >= 0 && o.col < b.cols && p.id < kMaxCorners)
       grid[static_cast<std::size_t>(p.id)] = t.X;
     ++valid;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/pair/reconstruction.hpp"
 
 using namespace naneye::recon;
@@ -82,6 +83,7 @@ TEST(PairReconstruction, ExactDataGivesExactPointsAndZeroCriteria) {
     // The sigma floor applies (the residuals are zero): Z^2/(f T) sqrt(2) 0.01 px ~ 0.3 mm at 70 mm.
     EXPECT_GT(p.depth_sigma_mm, 0.1);
     EXPECT_LT(p.depth_sigma_mm, 1.0);
+    EXPECT_TRUE(std::isnan(p.calib_sigma_mm));  // the paper's file: marginal sigmas, no covariance
   }
   ASSERT_TRUE(out.metrics);
   EXPECT_LT(out.metrics->planarity_mm, 1e-8);
@@ -89,6 +91,35 @@ TEST(PairReconstruction, ExactDataGivesExactPointsAndZeroCriteria) {
   EXPECT_LT(out.metrics->reprojection_px, 1e-8);
   EXPECT_NEAR(out.board->distance_mm, std::abs(board.R.col(2).dot(board.t)), 1e-8);
   EXPECT_LT(out.board->rms_px, 1e-8);
+}
+
+// With a covariance in the calibration, every valid corner also carries the depth sigma it allows
+// there; the points themselves do not change.
+TEST(PairReconstruction, CornersCarryTheCalibrationSigmaWhenTheCalibrationHasACovariance) {
+  StereoRig rig = rig_d3();
+  rig.sigmas.covariance = CalibrationUncertainty::assuming_independent_sigmas(rig)->covariance();
+  const auto u = CalibrationUncertainty::of(rig);
+  ASSERT_TRUE(u.has_value());
+  std::mt19937 rng(3);
+  const auto obs = observe(rig, kBoard, board_at(20, 40, kBoard), 0.05, rng);
+  PairResult with, without;
+  reconstruct_pair(rig, kBoard, {}, obs, with);
+  reconstruct_pair(rig_d3(), kBoard, {}, obs, without);
+  ASSERT_EQ(with.point_count, without.point_count);
+  int valid = 0;
+  for (int i = 0; i < with.point_count; ++i) {
+    const auto &a = with.points[i], &b = without.points[i];
+    ASSERT_EQ(a.valid, b.valid);
+    if (!a.valid) {
+      EXPECT_TRUE(std::isnan(a.calib_sigma_mm));
+      continue;
+    }
+    ++valid;
+    EXPECT_EQ(a.xyz_mm, b.xyz_mm);
+    EXPECT_EQ(a.depth_sigma_mm, b.depth_sigma_mm);
+    EXPECT_EQ(a.calib_sigma_mm, u->depth_sigma_mm(a.xyz_mm));
+  }
+  EXPECT_EQ(valid, 48);
 }
 
 TEST(PairReconstruction, SigmaIsMeasuredFromThePairsResiduals) {

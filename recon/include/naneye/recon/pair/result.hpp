@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 namespace naneye::recon {
@@ -17,7 +18,10 @@ struct PointResult {
   Eigen::Vector2d left_px{0, 0}, right_px{0, 0};  // raw pixels, centres at integers
   Eigen::Vector3d xyz_mm{0, 0, 0};                // triangulated (niter2 + refinement), left camera frame
   double depth_sigma_mm = 0;                      // first-order, from the measured corner noise
-  Eigen::Vector3d xyz_board_mm{0, 0, 0};          // the corner on the fitted board
+  // The depth sigma the calibration allows here (geometry/calibration_uncertainty.hpp): common to
+  // every corner of the pair; NaN unless valid and the calibration carries its covariance.
+  double calib_sigma_mm = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector3d xyz_board_mm{0, 0, 0};  // the corner on the fitted board
 };
 
 struct BoardResult {
