@@ -188,4 +188,15 @@ TEST(CalibrateCrossValidation, PaperSplitsAndOddEven) {
   EXPECT_GT(oe.ratio_rms, 0.4);
   EXPECT_LT(oe.ratio_rms, 1.8);
   EXPECT_LE(beyond3, 1);
+  // The same on depths (every corner both eyes saw, triangulated with each half): one pair of
+  // calibrations, so one draw of a shared error: loose bounds, like the parameters'.
+  std::printf(
+      "odd/even depths: %d corners, median |difference| %.3f %% of Z, median combined sigma %.3f %%, "
+      "RMS of the ratios %.2f\n",
+      oe.depth_corners, 100 * oe.depth_median_relative, 100 * oe.depth_sigma_median_relative,
+      oe.depth_ratio_rms);
+  EXPECT_GT(oe.depth_corners, 19 * 40);
+  EXPECT_GT(oe.depth_ratio_rms, 0.2);
+  EXPECT_LT(oe.depth_ratio_rms, 2.5);
+  EXPECT_GT(oe.depth_sigma_median_relative, 0.0);
 }
