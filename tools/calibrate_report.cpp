@@ -63,10 +63,9 @@ void print_odd_even(const recon::OddEvenValidation& v) {
       "  depth of the %d corners both eyes saw, triangulated with each half: median |odd - even| %.3f %% of "
       "Z,\n"
       "  median combined calibration sigma %.3f %% of Z, RMS of the ratios %.2f (about 1 when the depth "
-      "sigma "
-      "is honest)\n",
+      "sigma is honest;\n  %.2f with the marginal sigmas taken as independent)\n",
       v.depth_corners, 100.0 * v.depth_median_relative, 100.0 * v.depth_sigma_median_relative,
-      v.depth_ratio_rms);
+      v.depth_ratio_rms, v.depth_ratio_rms_independent);
 }
 
 }  // namespace
@@ -121,6 +120,7 @@ nlohmann::json report_json(const recon::CalibrationResult& res, const CollectedV
     o["ratio_rms"] = odd_even->ratio_rms;
     o["depth"] = {{"corners", odd_even->depth_corners},
                   {"ratio_rms", odd_even->depth_ratio_rms},
+                  {"ratio_rms_marginals_independent", odd_even->depth_ratio_rms_independent},
                   {"median_relative_difference", odd_even->depth_median_relative},
                   {"median_relative_combined_sigma", odd_even->depth_sigma_median_relative}};
     for (const auto& c : odd_even->parameters)

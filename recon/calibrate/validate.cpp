@@ -120,8 +120,10 @@ double median(std::vector<double> v) {
 
 void compare_depths(std::span<const CalibrationView> views, OddEvenValidation& out) {
   const auto odd = CalibrationUncertainty::of(out.odd.rig), even = CalibrationUncertainty::of(out.even.rig);
-  if (!odd || !even) return;
-  double sum = 0;
+  const auto odd_ind = CalibrationUncertainty::assuming_independent_sigmas(out.odd.rig);
+  const auto even_ind = CalibrationUncertainty::assuming_independent_sigmas(out.even.rig);
+  if (!odd || !even || !odd_ind || !even_ind) return;
+  double sum = 0, sum_ind = 0;
   std::vector<double> relative, sigma_relative;
   for (const CalibrationView& v : views)
     for (const BoardCorner& l : v.left)
@@ -133,12 +135,14 @@ void compare_depths(std::span<const CalibrationView> views, OddEvenValidation& o
         const double dz = a.X.z() - b.X.z(), z = 0.5 * (a.X.z() + b.X.z());
         const double combined = std::hypot(odd->depth_sigma_mm(a.X), even->depth_sigma_mm(b.X));
         sum += (dz / combined) * (dz / combined);
+        sum_ind += std::pow(dz / std::hypot(odd_ind->depth_sigma_mm(a.X), even_ind->depth_sigma_mm(b.X)), 2);
         relative.push_back(std::abs(dz) / z);
         sigma_relative.push_back(combined / z);
       }
   out.depth_corners = static_cast<int>(relative.size());
   if (relative.empty()) return;
   out.depth_ratio_rms = std::sqrt(sum / static_cast<double>(relative.size()));
+  out.depth_ratio_rms_independent = std::sqrt(sum_ind / static_cast<double>(relative.size()));
   out.depth_median_relative = median(relative);
   out.depth_sigma_median_relative = median(sigma_relative);
 }

@@ -139,7 +139,10 @@ struct OddEvenValidation {
   // sigma each rig's covariance allows (geometry/calibration_uncertainty.hpp). The corners of a
   // view share much of their error: this is a few views' worth of evidence, not thousands.
   int depth_corners = 0;
-  double depth_ratio_rms = 0;              // ~1 when the calibration's depth sigma is honest
+  double depth_ratio_rms = 0;  // ~1 when the calibration's depth sigma is honest
+  // The same ratio with each half's marginal sigmas taken as independent (all a calibration that
+  // keeps marginals only, like OpenCV's calibrateCameraExtended, could offer): the anchor.
+  double depth_ratio_rms_independent = 0;
   double depth_median_relative = 0;        // median |Z_odd - Z_even| / Z
   double depth_sigma_median_relative = 0;  // median sqrt(s_odd^2 + s_even^2) / Z
 };
