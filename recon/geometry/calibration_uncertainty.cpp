@@ -47,10 +47,6 @@ Eigen::Matrix<double, 2, 9> intrinsic_jacobian(const CameraModel& cam, const Eig
 
 }  // namespace
 
-const char* to_string(CalibrationUncertainty::Basis b) {
-  return b == CalibrationUncertainty::Basis::full_covariance ? "full_covariance" : "independent_sigmas";
-}
-
 std::optional<CalibrationUncertainty> CalibrationUncertainty::of(const StereoRig& rig) {
   if (!rig.sigmas.covariance) return std::nullopt;
   return CalibrationUncertainty(rig, *rig.sigmas.covariance, Basis::full_covariance);

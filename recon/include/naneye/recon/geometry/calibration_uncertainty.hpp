@@ -28,7 +28,8 @@ class CalibrationUncertainty {
   // From the rig's full covariance; empty without one. Only this basis gives a sigma to stand
   // behind: the marginals hide the correlations that matter most here (each eye's principal point
   // against the pose's rotation moves the disparity), and taken as independent the paper's sigmas
-  // claim 9.7 % of depth at 20 mm on the axis (docs/scene.md, "Calibration uncertainty").
+  // claim 9.7 % of depth at 20 mm on the axis (docs/calibration.md, "The covariance, and the depth
+  // sigma it allows": over repeated calibrations they overstate the spread 3x).
   static std::optional<CalibrationUncertainty> of(const StereoRig& rig);
   // The *_sigma entries taken as independent: a what-if for comparisons (`naneye calib info`, the
   // tests), never a point's sigma. Empty when the rig carries no sigma at all.
@@ -54,7 +55,5 @@ class CalibrationUncertainty {
   Basis basis_;
   std::array<Eigen::Matrix3d, 3> dR_dom_;  // dR/d(om_k), by central differences of Rodrigues
 };
-
-const char* to_string(CalibrationUncertainty::Basis b);
 
 }  // namespace naneye::recon
