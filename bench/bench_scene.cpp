@@ -154,6 +154,7 @@ void opencv_path(const recon::StereoRig& rig, const recon::scene::StereoLuma& lu
 struct DenseTally {
   std::vector<double> ms;
   std::string radii;  // the dense matcher's window radius per pair, px
+  std::string bands;  // the SGM's disparity band per pair, first + count, px
   long truth = 0, covered = 0, unseen = 0, valid = 0, bad5 = 0;
   double rel_sum = 0;
   void add(const cv::Mat& z, const cv::Mat& truth_z) {
@@ -249,21 +250,23 @@ void add_counts(recon::scene::MatchCounts& s, const recon::scene::MatchCounts& c
   s.converged += c.converged;
   s.residual += c.residual;
   s.left_right += c.left_right;
+  s.band_edge += c.band_edge;
   s.occluded += c.occluded;
   s.valid += c.valid;
 }
 
 // Where the rectified candidates go: the first validity test each one fails (docs/scene.md, Validity).
 void print_refusals(const std::vector<recon::scene::MatchCounts>& rows) {
-  std::printf("\n%-10s | %8s %7s %7s %7s %7s %7s %7s %7s %7s %7s\n", "refusals", "cand", "no-int", "l-r",
-              "window", "shift", "sigma", "conv", "chi2", "occl", "valid");
+  std::printf("\n%-10s | %8s %7s %7s %7s %7s %7s %7s %7s %7s %7s %7s\n", "refusals", "cand", "no-int", "l-r",
+              "band", "window", "shift", "sigma", "conv", "chi2", "occl", "valid");
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const auto& c = rows[k];
     const double n = std::max(1, c.candidates) / 100.0;
-    std::printf("%-10s | %8d %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%%\n",
-                sim::textured_preset_names()[k].c_str(), c.candidates, c.no_integer / n, c.left_right / n,
-                c.window / n, c.shift / n, c.texture / n, c.converged / n, c.residual / n, c.occluded / n,
-                c.valid / n);
+    std::printf(
+        "%-10s | %8d %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%% %6.1f%%\n",
+        sim::textured_preset_names()[k].c_str(), c.candidates, c.no_integer / n, c.left_right / n,
+        c.band_edge / n, c.window / n, c.shift / n, c.texture / n, c.converged / n, c.residual / n,
+        c.occluded / n, c.valid / n);
   }
   std::printf("%% of the rectified candidates (left data), summed over the renders\n");
 }
@@ -310,6 +313,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--whole-band")) ds.band_from_sparse = false;
     if (!std::strcmp(argv[i], "--dense-iterations") && i + 1 < argc)
       ds.matcher.iterations = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--defocus") && i + 1 < argc) sensor.defocus_sigma_px = std::atof(argv[++i]);
@@ -358,7 +362,7 @@ int main(int argc, char** argv) {
       // Dense on the luminance the sparse path made (the daemon shares it the same way).
       for (int k = 0; k < repeat; ++k) {
         const double t1 = thread_cpu_s();
-        dense.reconstruct(ours.luma(), depth);
+        dense.reconstruct(ours.luma(), depth, &res);
         da.ms.push_back(1e3 * (thread_cpu_s() - t1));
       }
       dg_dense.add(depth.z_mm.data(), depth.z_mm.size() * sizeof(float));
@@ -366,6 +370,8 @@ int main(int argc, char** argv) {
       da.add(cv::Mat(depth.height, depth.width, CV_32FC1, depth.z_mm.data()), p.depth);
       add_counts(mc, dense.match_counts());
       da.radii += (da.radii.empty() ? "" : " ") + std::to_string(dense.matcher().radius_used());
+      da.bands += (da.bands.empty() ? "" : " ") + std::to_string(dense.matcher().band_min()) + "+" +
+                  std::to_string(dense.matcher().band_size());
       cv_dense.run(ours.luma(), p.depth, db);
     }
     dense_rows.emplace_back(da, db);
@@ -400,12 +406,12 @@ int main(int argc, char** argv) {
     row(dense_rows[k].first);
     std::printf(" |");
     row(dense_rows[k].second);
-    std::printf(" | r %s\n", dense_rows[k].first.radii.c_str());
+    std::printf(" | r %s | band %s\n", dense_rows[k].first.radii.c_str(), dense_rows[k].first.bands.c_str());
   }
   std::printf(
       "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
       "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our window "
-      "radius per pair, px\n");
+      "radius per pair, px; band: the SGM's disparities per pair, first + count (px)\n");
   if (digest)
     for (std::size_t k = 0; k < digests.size(); ++k)
       std::printf("digest %-10s sparse %016llx dense %016llx\n", sim::textured_preset_names()[k].c_str(),

@@ -198,7 +198,7 @@ class SceneStep {
     if (!sparse_) return;
     sparse_->load_luma(left, right);
     sparse_->reconstruct(sparse_->luma(), sparse_result_);
-    dense_->reconstruct(sparse_->luma(), depth_);
+    dense_->reconstruct(sparse_->luma(), depth_, &sparse_result_);
     if (!depth_out_.empty()) write_depth_pngs(depth_out_, pair, depth_, z16_, s16_);
   }
   void report(Report& report, const recon::PairResult& result) const {

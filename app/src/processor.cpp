@@ -98,7 +98,7 @@ class Reconstruction final : public PairProcessor {
     sparse_->reconstruct(sparse_->luma(), scene.sparse);
     scene.computed = true;
     if (dense_ && depth) {
-      dense_->reconstruct(sparse_->luma(), *depth);
+      dense_->reconstruct(sparse_->luma(), *depth, &scene.sparse);
       scene.dense = true;
       scene.depth = summarize(*depth);
     }

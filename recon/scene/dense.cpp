@@ -72,6 +72,30 @@ struct DenseReconstructor::Impl {
   int visible_count = 0;
   std::vector<float> depths;  // scratch of the median
   SelectHistogram hist;
+
+  // DenseSettings::band_from_sparse: the band the seed's points need, inside the whole one.
+  void set_band(const SparseResult* seed) {
+    const MatcherSettings& full = matcher.settings();
+    int lo = full.min_disparity, size = full.num_disparities;
+    if (s.band_from_sparse && seed && seed->valid_count >= s.min_band_points) {
+      double dlo = std::numeric_limits<double>::infinity(), dhi = -dlo;
+      for (const ScenePoint& p : seed->points) {
+        if (!p.valid()) continue;
+        const double d = rect.disparity_for(rect.R_left_rect.row(2).dot(p.X));
+        dlo = std::min(dlo, d);
+        dhi = std::max(dhi, d);
+      }
+      const int a = static_cast<int>(std::floor(dlo - s.band_margin_px));
+      const int b = static_cast<int>(std::ceil(dhi + s.band_margin_px));
+      const int need = (b - a + 1 + 15) / 16 * 16;
+      if (std::isfinite(dlo) && need < size) {
+        lo = std::clamp(a - (need - (b - a + 1)) / 2, full.min_disparity,
+                        full.min_disparity + full.num_disparities - need);
+        size = need;
+      }
+    }
+    matcher.set_band(lo, size);
+  }
 };
 
 DenseReconstructor::DenseReconstructor(const StereoRig& rig, const DenseSettings& s)
@@ -92,9 +116,10 @@ const MatchCounts& DenseReconstructor::match_counts() const {
   return impl_->matcher.counts();
 }
 
-void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out) {
+void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out, const SparseResult* seed) {
   Impl& m = *impl_;
   const RectifiedRig& rr = m.rect;
+  m.set_band(seed);
   rr.resample(0, luma.left.data(), luma.width, m.left);
   rr.resample(1, luma.right.data(), luma.width, m.right);
   m.matcher.match(m.left, m.right, rr.valid[0], rr.valid[1]);

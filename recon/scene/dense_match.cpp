@@ -79,6 +79,16 @@ void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv
   if (s_.max_radius > s_.radius) choose_radius(left, valid_left);
 }
 
+void RectifiedMatcher::set_band(int min_disparity, int num_disparities) {
+  sgm_->set_band(min_disparity, num_disparities);
+}
+int RectifiedMatcher::band_min() const {
+  return sgm_->band_min();
+}
+int RectifiedMatcher::band_size() const {
+  return sgm_->band_size();
+}
+
 void RectifiedMatcher::match_at(int r, const cv::Mat& left, const cv::Mat& valid_left) {
   r_ = r;
   refine(left, valid_left);
@@ -302,7 +312,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
   level_medians(min_n);
   const double zq = upper_normal_quantile(s_.residual_p);
   MatchCounts c;
-  const int matchable_from = s_.min_disparity + s_.num_disparities;
+  const int matchable_from = sgm_->first_column();
   for (int y = 0; y < h_; ++y) {
     const std::uint8_t* vl = valid_left.ptr<std::uint8_t>(y);
     const float* sg = integer_.ptr<float>(y);
@@ -317,8 +327,9 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       const float d = d_[i];
       if (!std::isfinite(sg[x])) {
         // The SGM matches every column of the spans from min + number of disparities on (no
-        // uniqueness or speckle filter): a pixel it left without one there failed its left-right check.
-        ++(x >= matchable_from ? c.left_right : c.no_integer);
+        // uniqueness or speckle filter): a pixel it left without one there failed its left-right
+        // check, or (+infinity) its best lay on an edge of a narrowed band.
+        ++(std::isinf(sg[x]) ? c.band_edge : x >= matchable_from ? c.left_right : c.no_integer);
         continue;
       }
       if (!std::isfinite(d) || n_[i] < min_n || !(a_[i] > 0)) {

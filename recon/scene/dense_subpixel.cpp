@@ -96,9 +96,10 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& valid_left) {
       VB4 v;
       std::memcpy(&v, vl + x, sizeof v);
       const VF g = load<VF>(sg + x);
-      store(d + x, __builtin_convertvector(v, VI) != 0 ? g : VF{} + kNoMatch);
+      // g - g is 0 only where g is finite (+infinity: a narrowed band's edge, sgm.hpp).
+      store(d + x, (__builtin_convertvector(v, VI) != 0) & (g - g == 0) ? g : VF{} + kNoMatch);
     }
-    for (; x < w_; ++x) d[x] = vl[x] ? sg[x] : kNoMatch;
+    for (; x < w_; ++x) d[x] = vl[x] && std::isfinite(sg[x]) ? sg[x] : kNoMatch;
   }
   const float* S = sums_.data();
   float* mstep = chan_.data() + 4 * n;  // free once the window sums are taken

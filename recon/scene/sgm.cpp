@@ -14,7 +14,7 @@ constexpr int kPaths = 5;
 }  // namespace
 
 Sgm::Sgm(int width, int height, const SgmSettings& s)
-    : s_(s), w_(width), h_(height), D_(s.num_disparities), isa_(sgm_simd::best_isa()) {
+    : s_(s), w_(width), h_(height), min_(s.min_disparity), D_(s.num_disparities), isa_(sgm_simd::best_isa()) {
   CV_Assert(s.min_disparity >= 0 && D_ > 0 && D_ % 16 == 0 && s.p1 >= 0 && s.p2 >= s.p1);
   // Every path value is at most C + P2 (Eq. 13 subtracts the predecessor's minimum), so S, the sum
   // of five, stays below the pads and int16 holds it.
@@ -41,6 +41,19 @@ Sgm::Sgm(int width, int height, const SgmSettings& s)
   best_.assign(w, 0);
 }
 
+void Sgm::set_band(int min_disparity, int num_disparities) {
+  CV_Assert(num_disparities > 0 && num_disparities % 16 == 0 && min_disparity >= s_.min_disparity &&
+            min_disparity + num_disparities <= s_.min_disparity + s_.num_disparities);
+  min_ = min_disparity;
+  if (num_disparities == D_) return;
+  D_ = num_disparities;
+  // The path blocks' pads move with the block length (D + 2): lay them out again.
+  std::fill(paths_.begin(), paths_.end(), sgm_simd::kPad);
+  std::fill(horiz_.begin(), horiz_.end(), sgm_simd::kPad);
+  std::fill(start_.begin(), start_.end(), std::int16_t{0});
+  start_[0] = start_[static_cast<std::size_t>(D_) + 1] = sgm_simd::kPad;
+}
+
 // The 3-column Hamming sums of row k into its ring slot, over the columns its neighbour rows match
 // (row k enters the block of rows k - 1 .. k + 1).
 void Sgm::cost_row(const cv::Mat& left, const cv::Mat& right, int k) {
@@ -55,7 +68,7 @@ void Sgm::cost_row(const cv::Mat& left, const cv::Mat& right, int k) {
   if (u0 >= u1) return;
   // Hamming distances one column either side (u0 >= min + D, so u0 - 1 still has the whole band).
   const int h0 = u0 - 1, h1 = std::min(w_, u1 + 1);
-  const int dmin = s_.min_disparity;
+  const int dmin = min_;
   const int r0 = h0 - dmin - D_ + 1, r1 = h1 - dmin;  // the right columns they reach, >= 0
   sgm_simd::census_row(isa_, left.ptr<float>(), left.step1(), w_, h_, k, h0, h1, cl_.data());
   sgm_simd::census_row(isa_, right.ptr<float>(), right.step1(), w_, h_, k, r0, r1, cr_.data());
@@ -75,7 +88,10 @@ void Sgm::run(const cv::Mat& left, const cv::Mat& right, const int* lo, const in
             left.cols == w_ && left.rows == h_ && disparity.type() == CV_32FC1 &&
             disparity.size() == left.size());
   const std::size_t W = static_cast<std::size_t>(w_), D = static_cast<std::size_t>(D_), Ds = D + 2;
-  const int dmin = s_.min_disparity;
+  const int dmin = min_;
+  // A winner on an edge the band was narrowed at: the cost may fall on beyond it (set_band).
+  const bool low_cut = min_ > s_.min_disparity;
+  const bool high_cut = min_ + D_ < s_.min_disparity + s_.num_disparities;
   for (int y = 0; y < h_; ++y) {
     const auto k = static_cast<std::size_t>(y);
     lo_[k] = std::max(lo[y], first_column());
@@ -83,7 +99,7 @@ void Sgm::run(const cv::Mat& left, const cv::Mat& right, const int* lo, const in
     if (lo_[k] >= hi_[k]) lo_[k] = hi_[k] = 0;
   }
   std::fill(std::begin(ring_row_), std::end(ring_row_), -1);
-  lr_refused_ = 0;
+  lr_refused_ = edge_refused_ = 0;
   int prev_lo = 0, prev_hi = 0;
   for (int y = 0; y < h_; ++y) {
     float* out = disparity.ptr<float>(y);
@@ -137,6 +153,11 @@ void Sgm::run(const cv::Mat& left, const cv::Mat& right, const int* lo, const in
     for (int x = a; x < b; ++x) {
       const std::int16_t* s = sum_.data() + static_cast<std::size_t>(x) * D;
       const int d = best_[static_cast<std::size_t>(x)];
+      if ((low_cut && d == 0) || (high_cut && d == D_ - 1)) {
+        out[x] = std::numeric_limits<float>::infinity();
+        ++edge_refused_;
+        continue;
+      }
       float v = static_cast<float>(dmin + d);
       if (d > 0 && d < D_ - 1) {
         // The parabola through S at d - 1, d, d + 1 (its vertex; |offset| <= 1/2 at a minimum).
@@ -153,6 +174,7 @@ void Sgm::run(const cv::Mat& left, const cv::Mat& right, const int* lo, const in
       return dr >= dmin && std::abs(dr - d) > s_.lr_max_diff;
     };
     for (int x = a; x < b; ++x) {
+      if (!std::isfinite(out[x])) continue;
       const int d0 = static_cast<int>(std::floor(out[x])), d1 = static_cast<int>(std::ceil(out[x]));
       if (disagrees(x - d0, d0) && disagrees(x - d1, d1)) {
         out[x] = std::numeric_limits<float>::quiet_NaN();

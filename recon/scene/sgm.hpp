@@ -22,6 +22,9 @@
 //   diagonal x = x_r + d), with cv::StereoSGBM's rule: a left disparity v fails when the right
 //   disparity at x - floor(v) and at x - ceil(v) both exist and differ from those roundings by more
 //   than lr_max_diff.
+// - Band: the settings' band sizes the buffers; a run may search a narrower one (set_band: the dense
+//   path narrows it to the disparities the pair's sparse points found, dense.hpp). Its work is
+//   proportional to the band's width.
 // All buffers are sized in the constructor: run() allocates nothing. No threads.
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -47,8 +50,16 @@ class Sgm {
   // there is none (outside the columns matched, or refused by the left-right check).
   void run(const cv::Mat& left, const cv::Mat& right, const int* lo, const int* hi, cv::Mat& disparity);
   // The first column with the whole band inside the right image: min + D.
-  int first_column() const { return s_.min_disparity + s_.num_disparities; }
-  int left_right_refused() const { return lr_refused_; }  // last run's
+  int first_column() const { return min_ + D_; }
+  // The band of the next runs: [min_disparity, min_disparity + num_disparities) inside the
+  // settings' (the buffers' capacity), num a multiple of 16; the settings' band when never called.
+  // A winner on an edge the band was narrowed at is refused (+infinity in disparity): the cost may
+  // fall on beyond it, so that is no minimum (band_edge_refused()). Allocates nothing.
+  void set_band(int min_disparity, int num_disparities);
+  int band_min() const { return min_; }
+  int band_size() const { return D_; }
+  int band_edge_refused() const { return edge_refused_; }  // last run's
+  int left_right_refused() const { return lr_refused_; }   // last run's
   const SgmSettings& settings() const { return s_; }
   void set_isa(sgm_simd::Isa isa) { isa_ = isa; }  // the tests compare the builds
 
@@ -58,7 +69,8 @@ class Sgm {
   int range_hi(int y) const { return hi_[static_cast<std::size_t>(y)]; }
 
   SgmSettings s_;
-  int w_, h_, D_;
+  int w_, h_;
+  int min_, D_;  // the band run (set_band), inside the settings' band
   sgm_simd::Isa isa_;
   std::vector<int> lo_, hi_;                      // per row: the columns matched (empty: lo = hi)
   std::vector<std::uint32_t> cl_, cr_;            // one row's census, left and right
@@ -73,7 +85,7 @@ class Sgm {
   std::vector<std::int16_t> start_;               // a zero block with padded ends
   std::vector<std::int16_t> best_;                // one row's winner, d - min
   std::vector<std::int16_t> rcost_, rdisp_;       // the right view's best S and disparity, one row, reversed
-  int lr_refused_ = 0;
+  int lr_refused_ = 0, edge_refused_ = 0;
 };
 
 }  // namespace naneye::recon::scene

@@ -64,8 +64,10 @@ DenseFigures run(const sim::TexturedPair& p, bool bayer, recon::scene::DepthMap&
   const auto& rig = test::paper_d3();
   recon::scene::SparseReconstructor sr(rig);
   sr.load_luma(sim::raw_view(p.left, bayer), sim::raw_view(p.right, bayer));
+  recon::scene::SparseResult seed;
+  sr.reconstruct(sr.luma(), seed);
   recon::scene::DenseReconstructor dr(rig);
-  dr.reconstruct(sr.luma(), map);
+  dr.reconstruct(sr.luma(), map, &seed);  // the band from the pair's sparse points, as naneyed runs it
   const DenseFigures f = evaluate(map, p.depth, rig);
   std::printf(
       "%-22s %-5s truth-visible %5d valid %5d coverage %.1f %%  unseen %d outside %d  bad-5 %.2f %%  "

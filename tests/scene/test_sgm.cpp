@@ -125,6 +125,54 @@ TEST(Sgm, WorksOnlyInsideTheSpans) {
   EXPECT_GT(inside, 4000);
 }
 
+// A band narrowed to the background's disparities (4 .. 19 of 4 .. 35): the background is found as
+// in the whole band, no disparity lies outside the band, and the whole band set again gives a fresh
+// matcher's bits (the path buffers' pads laid out again). The strip (30 px), outside the band, is
+// refused on the band's edge only in part: the SGM gives most of it some disparity in the band (its
+// cost has no right answer there), which the dense matcher's own tests must refuse (DenseBand.*).
+TEST(Sgm, ANarrowedBandKeepsItsSurfacesAndRefusesItsEdges) {
+  const Occlusion pair(7);
+  std::vector<int> lo(kH, 0), hi(kH, kW);
+  Sgm sgm(kW, kH, occlusion_settings()), fresh(kW, kH, occlusion_settings());
+  cv::Mat disp(kH, kW, CV_32FC1), whole(kH, kW, CV_32FC1);
+  sgm.set_band(4, 16);
+  EXPECT_EQ(sgm.first_column(), 20);
+  sgm.run(pair.left, pair.right, lo.data(), hi.data(), disp);
+  int seen = 0, right = 0, strip = 0, strip_finite = 0, edge = 0;
+  for (int y = 3; y < kH - 3; ++y)
+    for (int x = 36; x < kW; ++x) {  // the whole band's first column on: the same pixels as above
+      const float d = disp.at<float>(y, x);
+      edge += std::isinf(d);
+      if (std::isfinite(d)) {
+        EXPECT_GE(d, 4.f - 0.5f);
+        EXPECT_LE(d, 19.f + 0.5f);
+      }
+      const bool near_edge = std::abs(x - 150) < 4 || std::abs(x - 190) < 4 || std::abs(x - 130) < 4;
+      if (near_edge || Occlusion::hidden(x)) continue;
+      if (Occlusion::truth(x) == 30) {
+        ++strip;
+        strip_finite += std::isfinite(d);
+        continue;
+      }
+      ++seen;
+      right += std::isfinite(d) && std::lround(d) == 10;
+    }
+  std::printf(
+      "band 4..19: background %d of %d right; strip (30 px) given a disparity %d of %d; band edge %d "
+      "(counted %d)\n",
+      right, seen, strip_finite, strip, edge, sgm.band_edge_refused());
+  EXPECT_GE(right, 0.98 * seen);
+  EXPECT_GT(sgm.band_edge_refused(), 0);
+  EXPECT_GE(sgm.band_edge_refused(), edge);  // every refusal counted (some lie left of column 36)
+  sgm.set_band(4, 32);
+  sgm.run(pair.left, pair.right, lo.data(), hi.data(), disp);
+  fresh.run(pair.left, pair.right, lo.data(), hi.data(), whole);
+  EXPECT_EQ(std::memcmp(disp.data, whole.data, disp.total() * disp.elemSize()), 0);
+  EXPECT_EQ(sgm.band_edge_refused(), 0);
+  EXPECT_THROW(sgm.set_band(4, 24), cv::Exception);  // not a multiple of 16
+  EXPECT_THROW(sgm.set_band(8, 32), cv::Exception);  // beyond the settings' band
+}
+
 // The builds (scalar reference, SSE2, AVX2 where this CPU has it) on the same random spans, images
 // with flat patches (equal census bits, ties in S) and a band not starting at 0: the same bits. Every
 // band length the path kernel compiles with its length (16-64 px at either width) and one it does

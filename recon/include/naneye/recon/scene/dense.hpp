@@ -26,6 +26,17 @@ struct DenseSettings {
   // Where the four rectified neighbours of a raw pixel differ by more than this, it sits on a depth
   // edge: no depth rather than a blend of two surfaces (px of disparity; the left-right tolerance).
   double max_neighbour_spread_px = 1.0;
+  // The integer stage's band from the pair's own sparse points (reconstruct's `seed`): the SGM's work
+  // is proportional to its band, and the whole 5-150 mm band is 48 px where a scene at 12-40 mm needs
+  // ~14. The band spans the valid points' disparities widened by band_margin_px either side (px: the
+  // parabola needs d - 1 and d + 1 inside, and the surface between two points may bulge beyond both
+  // by ~1 px), rounded up to the SGM's 16. With fewer than min_band_points valid points the whole
+  // band (too few to have seen every surface). A surface no point found whose disparity lies
+  // outside the band gets no depth rather than a wrong one: a best on a narrowed edge is refused,
+  // and the sub-pixel step's shift, residual and left-right tests catch a best inside it.
+  bool band_from_sparse = true;
+  double band_margin_px = 2.0;
+  int min_band_points = 24;
 };
 
 struct DepthMap {
@@ -50,7 +61,8 @@ class DenseReconstructor {
   DenseReconstructor& operator=(DenseReconstructor&&) noexcept;
   // One pair from luminance already computed (SparseReconstructor::load_luma / luma()), so that the
   // sparse and dense paths share one demosaic and one noise estimate.
-  void reconstruct(const StereoLuma& luma, DepthMap& out);
+  // `seed`: this pair's sparse result (DenseSettings::band_from_sparse), or none: the whole band.
+  void reconstruct(const StereoLuma& luma, DepthMap& out, const SparseResult* seed = nullptr);
   const StereoRig& rig() const;
   // Why the last pair's rectified pixels have no disparity (dense_match.hpp).
   const MatchCounts& match_counts() const;

@@ -102,6 +102,7 @@ struct MatchCounts {
   int converged = 0;   // the reference field still moving by more than sigma
   int residual = 0;    // residual above the pair's noise (chi-square)
   int left_right = 0;  // the integer stage's left-right check refused it (counted before the tests below)
+  int band_edge = 0;   // the integer stage's best lay on an edge the band was narrowed at (set_band)
   int occluded = 0;    // a nearer surface claims the same right pixel
   int valid = 0;
   int radius = 0;  // px; the sub-pixel window's radius this pair was matched with
@@ -127,9 +128,16 @@ class RectifiedMatcher {
   // where the eye has data. Results in disparity() / sigma() (CV_32FC1, NaN = no match).
   void match(const cv::Mat& left, const cv::Mat& right, const cv::Mat& valid_left,
              const cv::Mat& valid_right);
+  // The disparity band of the next pairs' integer stage, inside the settings' band (num a multiple
+  // of 16); the settings' band until called. A pixel whose integer best lies on an edge the band was
+  // narrowed at has no match (MatchCounts::band_edge). Allocates nothing.
+  void set_band(int min_disparity, int num_disparities);
+  int band_min() const;
+  int band_size() const;
   const cv::Mat& disparity() const { return disp_; }
   const cv::Mat& sigma() const { return sigma_; }
-  // The integer stage's result (its parabola; NaN where it gave none), for comparisons.
+  // The integer stage's result (its parabola; NaN where it gave none, +infinity where its best lay on
+  // a narrowed band's edge), for comparisons.
   const cv::Mat& integer_stage() const { return integer_; }
   const MatchCounts& counts() const { return counts_; }
   double residual_sigma() const { return residual_sigma_; }  // median window's, input units
