@@ -179,12 +179,32 @@ struct DenseTally {
   }
 };
 
+// Both dense maps on the pixels both give a depth where the truth has one: the same pixels, so that
+// the OpenCV path's central crop (its alpha 0 rectification) does not flatter or harm either.
+struct CommonTally {
+  long pix = 0, bad_ours = 0, bad_cv = 0;
+  double rel_ours = 0, rel_cv = 0;
+  void add(const cv::Mat& ours, const cv::Mat& theirs, const cv::Mat& truth_z) {
+    for (int r = 0; r < truth_z.rows; ++r)
+      for (int c = 0; c < truth_z.cols; ++c) {
+        const double zt = truth_z.at<double>(r, c), a = ours.at<float>(r, c), b = theirs.at<float>(r, c);
+        if (!std::isfinite(zt) || !std::isfinite(a) || !std::isfinite(b)) continue;
+        ++pix;
+        rel_ours += std::abs(a - zt) / zt;
+        rel_cv += std::abs(b - zt) / zt;
+        bad_ours += std::abs(a - zt) > 0.05 * zt;
+        bad_cv += std::abs(b - zt) > 0.05 * zt;
+      }
+  }
+};
+
 // The OpenCV dense path a user would glue: stereoRectify (alpha 0) + initUndistortRectifyMap +
 // remap + StereoSGBM (3-way, block 5, the documented P1 / P2, uniqueness 10, speckle 100 / 32,
 // left-right 1 px) + reprojectImageTo3D, read back at each left raw pixel's rectified position
 // (undistortPoints with R1, P1: OpenCV's own map, computed once like the rectification maps).
 struct OpenCvDense {
   cv::Mat m1x, m1y, m2x, m2y, Q, R1, raw_x, raw_y;
+  cv::Mat z;  // the last pair's depth on the left raw grid (NaN: none)
   cv::Ptr<cv::StereoSGBM> sgbm;
   int min_disp = 0, num_disp = 48;
   explicit OpenCvDense(const recon::StereoRig& rig) {
@@ -221,7 +241,8 @@ struct OpenCvDense {
     sgbm->compute(lr, rr, d16);
     d16.convertTo(df, CV_32F, 1.0 / 16);
     cv::reprojectImageTo3D(df, xyz, Q, true);
-    cv::Mat z(truth.rows, truth.cols, CV_32FC1, cv::Scalar(NAN));
+    z.create(truth.rows, truth.cols, CV_32FC1);
+    z.setTo(cv::Scalar(NAN));
     const cv::Matx33d Rt = cv::Matx33d(R1).t();
     for (int r = 0; r < z.rows; ++r)
       for (int c = 0; c < z.cols; ++c) {
@@ -314,6 +335,7 @@ int main(int argc, char** argv) {
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--whole-band")) ds.band_from_sparse = false;
+    if (!std::strcmp(argv[i], "--band-margin") && i + 1 < argc) ds.band_margin_px = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--dense-iterations") && i + 1 < argc)
       ds.matcher.iterations = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--defocus") && i + 1 < argc) sensor.defocus_sigma_px = std::atof(argv[++i]);
@@ -329,6 +351,7 @@ int main(int argc, char** argv) {
   recon::scene::DepthMap depth;
   OpenCvDense cv_dense(rig);
   std::vector<std::pair<DenseTally, DenseTally>> dense_rows;
+  std::vector<CommonTally> common_rows;
   std::vector<recon::scene::MatchCounts> refused;
   std::vector<StatusRow> statuses;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> digests;
@@ -341,6 +364,7 @@ int main(int argc, char** argv) {
   for (const auto& name : sim::textured_preset_names()) {
     Tally a, b;
     DenseTally da, db;
+    CommonTally both;
     recon::scene::MatchCounts mc;
     StatusRow st{};
     Digest dg_sparse, dg_dense;
@@ -373,8 +397,10 @@ int main(int argc, char** argv) {
       da.bands += (da.bands.empty() ? "" : " ") + std::to_string(dense.matcher().band_min()) + "+" +
                   std::to_string(dense.matcher().band_size());
       cv_dense.run(ours.luma(), p.depth, db);
+      both.add(cv::Mat(depth.height, depth.width, CV_32FC1, depth.z_mm.data()), cv_dense.z, p.depth);
     }
     dense_rows.emplace_back(da, db);
+    common_rows.push_back(both);
     refused.push_back(mc);
     statuses.push_back(st);
     digests.emplace_back(dg_sparse.h, dg_dense.h);
@@ -412,6 +438,16 @@ int main(int argc, char** argv) {
       "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
       "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our window "
       "radius per pair, px; band: the SGM's disparities per pair, first + count (px)\n");
+  std::printf("\n%-10s | %9s | %-17s | %-17s\n", "same pixels", "", "ours (dense)", "OpenCV dense path");
+  std::printf("%-10s | %9s | %8s %8s | %8s %8s\n", "scene", "pix", "err %", "bad-5 %", "err %", "bad-5 %");
+  for (std::size_t k = 0; k < common_rows.size(); ++k) {
+    const CommonTally& c = common_rows[k];
+    const double n = static_cast<double>(std::max(1L, c.pix));
+    std::printf("%-10s | %9.0f | %7.2f%% %7.2f%% | %7.2f%% %7.2f%%\n", sim::textured_preset_names()[k].c_str(),
+                c.pix / static_cast<double>(seeds), 100 * c.rel_ours / n, 100 * c.bad_ours / n, 100 * c.rel_cv / n,
+                100 * c.bad_cv / n);
+  }
+  std::printf("the pixels both dense paths give a depth where the truth has one, per pair\n");
   if (digest)
     for (std::size_t k = 0; k < digests.size(); ++k)
       std::printf("digest %-10s sparse %016llx dense %016llx\n", sim::textured_preset_names()[k].c_str(),
