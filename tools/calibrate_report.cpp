@@ -66,6 +66,15 @@ void print_odd_even(const recon::OddEvenValidation& v) {
       "sigma is honest;\n  %.2f with the marginal sigmas taken as independent)\n",
       v.depth_corners, 100.0 * v.depth_median_relative, 100.0 * v.depth_sigma_median_relative,
       v.depth_ratio_rms, v.depth_ratio_rms_independent);
+  if (v.sigma_scale > 1.0)
+    std::printf(
+        "  beyond the %.1f that honest sigmas reach by chance: the calibration's sigmas understate, and the file's\n"
+        "  calibration_sigma_scale %.2f widens every calibration sigma by it (a lower bound: errors both halves\n"
+        "  share do not show here)\n",
+        recon::kHonestDepthRatioRmsMax, v.sigma_scale);
+  else
+    std::printf("  within the %.1f that honest sigmas reach by chance: the covariance is kept as it is\n",
+                recon::kHonestDepthRatioRmsMax);
 }
 
 }  // namespace
@@ -122,7 +131,8 @@ nlohmann::json report_json(const recon::CalibrationResult& res, const CollectedV
                   {"ratio_rms", odd_even->depth_ratio_rms},
                   {"ratio_rms_marginals_independent", odd_even->depth_ratio_rms_independent},
                   {"median_relative_difference", odd_even->depth_median_relative},
-                  {"median_relative_combined_sigma", odd_even->depth_sigma_median_relative}};
+                  {"median_relative_combined_sigma", odd_even->depth_sigma_median_relative},
+                  {"sigma_scale", odd_even->sigma_scale}};
     for (const auto& c : odd_even->parameters)
       o["parameters"].push_back({{"name", c.name},
                                  {"odd", c.odd},

@@ -161,7 +161,14 @@ void run_calibrate(const CalibrateOptions& o) {
   for (const auto& in : o.inputs) provenance << "# input: " << in << "\n";
   for (const auto& in : o.left) provenance << "# left: " << in << "\n";
   for (const auto& in : o.right) provenance << "# right: " << in << "\n";
-  write_atomically(res.rig, o.output, provenance.str());
+  recon::StereoRig rig = res.rig;
+  if (odd_even && odd_even->ok && rig.sigmas.covariance) {
+    rig.sigmas.covariance_scale = odd_even->sigma_scale;
+    provenance << "# cross-validation (odd against even views): depth ratio RMS " << odd_even->depth_ratio_rms
+               << " over " << odd_even->depth_corners << " corners; calibration_sigma_scale "
+               << odd_even->sigma_scale << "\n";
+  }
+  write_atomically(rig, o.output, provenance.str());
   print_report(res, views, splits.get(), odd_even.get(), settings, {o.json, o.output});
 }
 

@@ -145,6 +145,7 @@ void compare_depths(std::span<const CalibrationView> views, OddEvenValidation& o
   out.depth_ratio_rms_independent = std::sqrt(sum_ind / static_cast<double>(relative.size()));
   out.depth_median_relative = median(relative);
   out.depth_sigma_median_relative = median(sigma_relative);
+  if (out.depth_ratio_rms > kHonestDepthRatioRmsMax) out.sigma_scale = out.depth_ratio_rms;
 }
 
 }  // namespace

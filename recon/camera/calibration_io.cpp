@@ -209,6 +209,31 @@ bool optional_covariance(const Keys& keys, std::optional<CalibrationCovariance>&
   return true;
 }
 
+// The optional calibration_sigma_scale (CalibrationSigmas::covariance_scale): a single finite
+// number >= 1, and only beside the covariance it scales.
+bool optional_covariance_scale(const Keys& keys, const CalibrationSigmas& s, double& out) {
+  const std::string key = "calibration_sigma_scale";
+  const Entry* e = keys.find(key);
+  if (!e) return true;
+  Refusal& r = keys.refusal();
+  if (!finite(r, *e, key)) return false;
+  if (e->value.total() != 1) {
+    refuse(r, e->file, key, "must be a single number");
+    return false;
+  }
+  const double v = e->value.at<double>(0);
+  if (!(v >= 1.0)) {
+    refuse(r, e->file, key, "must be >= 1 (it only ever widens the covariance's sigmas)");
+    return false;
+  }
+  if (!s.covariance) {
+    refuse(r, e->file, key, "given without calibration_covariance, which it scales");
+    return false;
+  }
+  out = v;
+  return true;
+}
+
 // The whole file, refused once it is past what read_calibration_yaml takes (a pipe has no size
 // to ask for, so it is read as it comes).
 std::string read_text(const std::filesystem::path& path) {
@@ -292,7 +317,7 @@ RigOrRefusal try_parse_rig(const std::vector<CalibrationText>& texts) {
   if (!optional_sigma<3, 3>(keys, "M1_sigma", s.M1) || !optional_sigma<3, 3>(keys, "M2_sigma", s.M2) ||
       !optional_sigma<5, 1>(keys, "D1_sigma", s.D1) || !optional_sigma<5, 1>(keys, "D2_sigma", s.D2) ||
       !optional_sigma<3, 1>(keys, "om_sigma", s.om) || !optional_sigma<3, 1>(keys, "T_sigma", s.T) ||
-      !optional_covariance(keys, s.covariance))
+      !optional_covariance(keys, s.covariance) || !optional_covariance_scale(keys, s, s.covariance_scale))
     return refused();
   out.rig = std::move(rig);
   return out;
@@ -331,6 +356,13 @@ void save_rig(const StereoRig& rig, const std::filesystem::path& file) {
         "The calibration's covariance; rows and columns: left fx fy cx cy k1 k2 p1 p2 k3, right the same, "
         "om (3), T (3, mm). Fixed parameters have zero rows.");
     put("calibration_covariance", *s.covariance);
+    if (s.covariance_scale != 1.0) {
+      fs.writeComment(
+          "The factor its sigmas understate the calibration's errors by, measured by cross-validation "
+          "when it was made (odd against even views, docs/calibration.md); applied to every calibration "
+          "sigma.");
+      fs << "calibration_sigma_scale" << s.covariance_scale;
+    }
   }
 }
 

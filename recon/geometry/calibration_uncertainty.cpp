@@ -49,7 +49,8 @@ Eigen::Matrix<double, 2, 9> intrinsic_jacobian(const CameraModel& cam, const Eig
 
 std::optional<CalibrationUncertainty> CalibrationUncertainty::of(const StereoRig& rig) {
   if (!rig.sigmas.covariance) return std::nullopt;
-  return CalibrationUncertainty(rig, *rig.sigmas.covariance, Basis::full_covariance);
+  const double k = rig.sigmas.covariance_scale;
+  return CalibrationUncertainty(rig, k * k * *rig.sigmas.covariance, Basis::full_covariance);
 }
 
 std::optional<CalibrationUncertainty> CalibrationUncertainty::assuming_independent_sigmas(

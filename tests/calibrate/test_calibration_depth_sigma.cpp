@@ -5,10 +5,13 @@
 // independent (what a file with *_sigma entries alone would allow) are printed beside it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "calib_scene.hpp"
+#include "naneye/recon/calibrate/calibrate.hpp"
 #include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 
@@ -82,6 +85,35 @@ TEST(CalibrationDepthSigma, HoldsOverRepeatedCalibrations) {
   // The marginals alone are no sigma: taken as independent they overstate the depth's spread
   // several-fold (0.31 measured), which is why only a full covariance gives one.
   EXPECT_LT(pooled_independent, 0.6);
+}
+
+}  // namespace calibration_depth_sigma
+
+namespace calibration_depth_sigma {
+
+// The odd/even cross-validation's depth ratio (calibrate.hpp) where the covariance is honest (the
+// test above): one split is one draw of two calibrations' errors, so its ratio spreads widely about
+// 1. kHonestDepthRatioRmsMax must lie above that spread, or naneye calibrate would widen honest
+// sigmas by chance; measured 0.49-1.45, median 0.89.
+TEST(CalibrationDepthSigma, OddEvenRatioUnderHonestNoiseStaysBelowTheScaleThreshold) {
+  const recon::StereoRig& truth = test::paper_d3();
+  const auto poses = test::sample_poses(truth, 16, 7);
+  std::vector<double> r;
+  int scaled = 0;
+  for (int c = 0; c < kCalibrations; ++c) {
+    const auto views = test::noisy_views(truth, poses, kNoisePx, 100 + static_cast<std::uint64_t>(c));
+    const recon::OddEvenValidation v = recon::cross_validate_odd_even(views, test::recon_board(), {});
+    ASSERT_TRUE(v.ok) << v.message;
+    r.push_back(v.depth_ratio_rms);
+    scaled += v.sigma_scale != 1.0;
+    EXPECT_EQ(v.sigma_scale, v.depth_ratio_rms > recon::kHonestDepthRatioRmsMax ? v.depth_ratio_rms : 1.0);
+  }
+  std::sort(r.begin(), r.end());
+  std::printf("odd/even depth ratio RMS over %d honest calibrations: min %.2f, median %.2f, max %.2f; scaled %d\n",
+              kCalibrations, r.front(), r[r.size() / 2], r.back(), scaled);
+  EXPECT_GT(r[r.size() / 2], 0.7);
+  EXPECT_LT(r[r.size() / 2], 1.2);
+  EXPECT_LE(scaled, 1);  // at most one in 24 by chance
 }
 
 }  // namespace calibration_depth_sigma

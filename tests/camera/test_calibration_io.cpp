@@ -134,6 +134,31 @@ TEST_F(CalibFiles, CovarianceRoundTripsAndMustBeACovariance) {
   expect_refused(with(negative), {"'calibration_covariance'", "not positive semi-definite"});
 }
 
+// The cross-validation's scale (CalibrationSigmas::covariance_scale) reads back to the bit beside
+// its covariance, is not written when 1, and is refused below 1 or without the covariance it scales.
+TEST_F(CalibFiles, SigmaScaleRoundTripsAndOnlyWidens) {
+  auto rig = load_rig(kDefault);
+  Eigen::Matrix<double, naneye::recon::kCalibrationParameters, naneye::recon::kCalibrationParameters> A;
+  for (int i = 0; i < A.size(); ++i) A(i) = std::cos(0.3 + 0.71 * i) * std::pow(10.0, -(i % 4));
+  rig.sigmas.covariance = A * A.transpose();
+  const fs::path plain = dir_ / "plain.yaml", scaled = dir_ / "scaled.yaml";
+  naneye::recon::save_rig(rig, plain);
+  rig.sigmas.covariance_scale = 2.6371;
+  naneye::recon::save_rig(rig, scaled);
+  EXPECT_EQ(load_rig(plain).sigmas.covariance_scale, 1.0);
+  EXPECT_EQ(load_rig(scaled).sigmas.covariance_scale, 2.6371);
+  std::ifstream in(plain);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(text.find("calibration_sigma_scale"), std::string::npos);
+  expect_refused(write("below_one.yaml", text + "calibration_sigma_scale: 0.5\n"),
+                 {"below_one.yaml", "'calibration_sigma_scale'", "must be >= 1"});
+  expect_refused(write("not_a_number.yaml", text + "calibration_sigma_scale: .nan\n"),
+                 {"'calibration_sigma_scale'", "non-finite"});
+  const std::string marginals_only = text.substr(0, text.find("calibration_covariance:"));
+  expect_refused(write("alone.yaml", marginals_only + "calibration_sigma_scale: 2\n"),
+                 {"'calibration_sigma_scale'", "without calibration_covariance"});
+}
+
 TEST_F(CalibFiles, IntrinsicsAndExtrinsicsInTwoFiles) {
   const auto pos = text_.find("R: !!opencv-matrix");
   const auto sig = text_.find("# One-sigma");

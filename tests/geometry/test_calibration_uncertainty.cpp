@@ -151,5 +151,22 @@ TEST(CalibrationUncertainty, AbsentWithoutSigmas) {
   EXPECT_FALSE(CalibrationUncertainty::assuming_independent_sigmas(rig).has_value());
 }
 
+// The cross-validation's scale (rig.hpp covariance_scale) widens every full-covariance sigma by
+// exactly its factor and leaves the what-if from the marginals alone.
+TEST(CalibrationUncertainty, TheCrossValidationScaleWidensEverySigmaByItsFactor) {
+  StereoRig rig = test::paper_d3();
+  rig.sigmas.covariance = correlated(rig, 1.0, 3);
+  const auto plain = CalibrationUncertainty::of(rig);
+  const auto marginals = CalibrationUncertainty::assuming_independent_sigmas(rig);
+  rig.sigmas.covariance_scale = 2.5;
+  const auto scaled = CalibrationUncertainty::of(rig);
+  const auto marginals_scaled = CalibrationUncertainty::assuming_independent_sigmas(rig);
+  ASSERT_TRUE(plain && scaled && marginals && marginals_scaled);
+  for (const Eigen::Vector3d& X : points()) {
+    EXPECT_NEAR(scaled->depth_sigma_mm(X), 2.5 * plain->depth_sigma_mm(X), 1e-12 * plain->depth_sigma_mm(X));
+    EXPECT_EQ(marginals_scaled->depth_sigma_mm(X), marginals->depth_sigma_mm(X));
+  }
+}
+
 }  // namespace calibration_uncertainty_test
 }  // namespace naneye::recon

@@ -90,4 +90,41 @@ TEST(CalibratePhotographs, OpenCvSampleSetLeftFxWithinOnePercentOfOpenCvs) {
   std::filesystem::remove(out);
 }
 
+// On real photographs the halves' depths differ by more than honest sigmas allow by chance
+// (kHonestDepthRatioRmsMax): `--cross-validate` writes the measured factor as
+// calibration_sigma_scale, and `calib info` widens every calibration sigma by it; the same
+// calibration without the cross-validation is left as the bundle made it.
+TEST(CalibratePhotographs, CrossValidationWidensTheUnderstatedSigmas) {
+  if (!std::filesystem::exists(kDir + "/left01.jpg"))
+    GTEST_SKIP() << "opencv-doc is not installed (scripts/install-deps.sh installs it)";
+  const auto tmp = std::filesystem::temp_directory_path();
+  const std::string plain = (tmp / "naneye-photo-plain.yaml").string(),
+                    checked = (tmp / "naneye-photo-checked.yaml").string();
+  const std::string args = "calibrate --left '" + kDir + "/left[0-9]*.jpg' --right '" + kDir +
+                           "/right[0-9]*.jpg' --pattern 6x9 --square-mm 25 --json -o ";
+  ASSERT_EQ(naneye::test::run_cli(args + plain).exit_code, 0);
+  const auto r = naneye::test::run_cli(args + checked + " --cross-validate");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto depth = nlohmann::json::parse(r.out)["cross_validation"]["odd_even"]["depth"];
+  const double ratio = depth["ratio_rms"].get<double>(), scale = depth["sigma_scale"].get<double>();
+  std::printf("photographs: odd/even depth ratio RMS %.2f, sigma scale written %.2f\n", ratio, scale);
+  EXPECT_GT(ratio, 2.0);  // measured 2.64
+  EXPECT_EQ(scale, ratio);
+  const auto a = nlohmann::json::parse(naneye::test::run_cli("calib info --json " + plain).out);
+  const auto b = nlohmann::json::parse(naneye::test::run_cli("calib info --json " + checked).out);
+  EXPECT_EQ(a["calibration_depth_sigma"]["scale"].get<double>(), 1.0);
+  EXPECT_NEAR(b["calibration_depth_sigma"]["scale"].get<double>(), scale, 1e-9 * scale);
+  const auto& pa = a["calibration_depth_sigma"]["on_axis"];
+  const auto& pb = b["calibration_depth_sigma"]["on_axis"];
+  ASSERT_EQ(pa.size(), pb.size());
+  ASSERT_GE(pa.size(), 1u);
+  for (std::size_t i = 0; i < pa.size(); ++i)
+    EXPECT_NEAR(pb[i]["sigma_mm"].get<double>(), scale * pa[i]["sigma_mm"].get<double>(),
+                1e-6 * pb[i]["sigma_mm"].get<double>());
+  const auto text = naneye::test::run_cli("calib info " + checked).out;
+  EXPECT_NE(text.find("widened"), std::string::npos) << text;
+  std::filesystem::remove(plain);
+  std::filesystem::remove(checked);
+}
+
 }  // namespace

@@ -29,7 +29,8 @@ class CalibrationUncertainty {
   // behind: the marginals hide the correlations that matter most here (each eye's principal point
   // against the pose's rotation moves the disparity), and taken as independent the paper's sigmas
   // claim 9.7 % of depth at 20 mm on the axis (docs/calibration.md, "The covariance, and the depth
-  // sigma it allows": over repeated calibrations they overstate the spread 3x).
+  // sigma it allows": over repeated calibrations they overstate the spread 3x). Scaled by the
+  // rig's covariance_scale (its cross-validation at calibration; 1 when not measured).
   static std::optional<CalibrationUncertainty> of(const StereoRig& rig);
   // The *_sigma entries taken as independent: a what-if for comparisons (`naneye calib info`, the
   // tests), never a point's sigma. Empty when the rig carries no sigma at all.
