@@ -443,9 +443,9 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < common_rows.size(); ++k) {
     const CommonTally& c = common_rows[k];
     const double n = static_cast<double>(std::max(1L, c.pix));
-    std::printf("%-10s | %9.0f | %7.2f%% %7.2f%% | %7.2f%% %7.2f%%\n", sim::textured_preset_names()[k].c_str(),
-                c.pix / static_cast<double>(seeds), 100 * c.rel_ours / n, 100 * c.bad_ours / n, 100 * c.rel_cv / n,
-                100 * c.bad_cv / n);
+    std::printf("%-10s | %9.0f | %7.2f%% %7.2f%% | %7.2f%% %7.2f%%\n",
+                sim::textured_preset_names()[k].c_str(), c.pix / static_cast<double>(seeds),
+                100 * c.rel_ours / n, 100 * c.bad_ours / n, 100 * c.rel_cv / n, 100 * c.bad_cv / n);
   }
   std::printf("the pixels both dense paths give a depth where the truth has one, per pair\n");
   if (digest)

@@ -68,8 +68,10 @@ void print_odd_even(const recon::OddEvenValidation& v) {
       v.depth_ratio_rms, v.depth_ratio_rms_independent);
   if (v.sigma_scale > 1.0)
     std::printf(
-        "  beyond the %.1f that honest sigmas reach by chance: the calibration's sigmas understate, and the file's\n"
-        "  calibration_sigma_scale %.2f widens every calibration sigma by it (a lower bound: errors both halves\n"
+        "  beyond the %.1f that honest sigmas reach by chance: the calibration's sigmas understate, and the "
+        "file's\n"
+        "  calibration_sigma_scale %.2f widens every calibration sigma by it (a lower bound: errors both "
+        "halves\n"
         "  share do not show here)\n",
         recon::kHonestDepthRatioRmsMax, v.sigma_scale);
   else

@@ -59,7 +59,8 @@ void print_calibration_text(const nlohmann::json& j) {
                  "baselines)\n";
     if (const double k = j["calibration_depth_sigma"]["scale"].get<double>(); k != 1.0)
       std::cout << "  widened " << k
-                << "x: the understatement its cross-validation measured when it was made (calibration_sigma_scale)\n";
+                << "x: the understatement its cross-validation measured when it was made "
+                   "(calibration_sigma_scale)\n";
     print_axis(j["calibration_depth_sigma"]["on_axis"]);
     return;
   }
@@ -78,9 +79,8 @@ nlohmann::json on_axis_json(const recon::StereoRig& rig,
                             const std::optional<recon::CalibrationUncertainty>& u) {
   if (!u) return nullptr;
   nlohmann::json points = nlohmann::json::array();
-  const double scale = u->basis() == recon::CalibrationUncertainty::Basis::full_covariance
-                           ? rig.sigmas.covariance_scale
-                           : 1.0;
+  const double scale =
+      u->basis() == recon::CalibrationUncertainty::Basis::full_covariance ? rig.sigmas.covariance_scale : 1.0;
   for (double baselines : {10.0, 20.0, 40.0, 70.0}) {
     const Eigen::Vector3d X(0.0, 0.0, baselines * rig.baseline_mm());
     const Eigen::Vector2d pr = rig.right.project(Eigen::Vector3d(rig.R * X + rig.T));

@@ -109,8 +109,9 @@ TEST(CalibrationDepthSigma, OddEvenRatioUnderHonestNoiseStaysBelowTheScaleThresh
     EXPECT_EQ(v.sigma_scale, v.depth_ratio_rms > recon::kHonestDepthRatioRmsMax ? v.depth_ratio_rms : 1.0);
   }
   std::sort(r.begin(), r.end());
-  std::printf("odd/even depth ratio RMS over %d honest calibrations: min %.2f, median %.2f, max %.2f; scaled %d\n",
-              kCalibrations, r.front(), r[r.size() / 2], r.back(), scaled);
+  std::printf(
+      "odd/even depth ratio RMS over %d honest calibrations: min %.2f, median %.2f, max %.2f; scaled %d\n",
+      kCalibrations, r.front(), r[r.size() / 2], r.back(), scaled);
   EXPECT_GT(r[r.size() / 2], 0.7);
   EXPECT_LT(r[r.size() / 2], 1.2);
   EXPECT_LE(scaled, 1);  // at most one in 24 by chance
