@@ -334,7 +334,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
-    if (!std::strcmp(argv[i], "--whole-band")) ds.band_from_sparse = false;
+    if (!std::strcmp(argv[i], "--band-from-sparse")) ds.band_from_sparse = true;
     if (!std::strcmp(argv[i], "--band-margin") && i + 1 < argc) ds.band_margin_px = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--dense-iterations") && i + 1 < argc)
       ds.matcher.iterations = std::atoi(argv[++i]);

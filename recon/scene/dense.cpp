@@ -75,8 +75,8 @@ struct DenseReconstructor::Impl {
 
   // DenseSettings::band_from_sparse: the band the seed's points need, inside the whole one.
   void set_band(const SparseResult* seed) {
-    const MatcherSettings& full = matcher.settings();
-    int lo = full.min_disparity, size = full.num_disparities;
+    const DisparityBand whole{matcher.settings().min_disparity, matcher.settings().num_disparities};
+    DisparityBand b = whole;
     if (s.band_from_sparse && seed && seed->valid_count >= s.min_band_points) {
       double dlo = std::numeric_limits<double>::infinity(), dhi = -dlo;
       for (const ScenePoint& p : seed->points) {
@@ -85,16 +85,9 @@ struct DenseReconstructor::Impl {
         dlo = std::min(dlo, d);
         dhi = std::max(dhi, d);
       }
-      const int a = static_cast<int>(std::floor(dlo - s.band_margin_px));
-      const int b = static_cast<int>(std::ceil(dhi + s.band_margin_px));
-      const int need = (b - a + 1 + 15) / 16 * 16;
-      if (std::isfinite(dlo) && need < size) {
-        lo = std::clamp(a - (need - (b - a + 1)) / 2, full.min_disparity,
-                        full.min_disparity + full.num_disparities - need);
-        size = need;
-      }
+      b = band_around(dlo, dhi, s.band_margin_px, whole);
     }
-    matcher.set_band(lo, size);
+    matcher.set_band(b.min_disparity, b.num_disparities);
   }
 };
 

@@ -38,6 +38,16 @@ double effective_dof(double q, double median) {
   return 2.0 / (9.0 * r * r);
 }
 
+DisparityBand band_around(double lo, double hi, double margin_px, const DisparityBand& whole) {
+  if (!std::isfinite(lo) || !std::isfinite(hi) || hi < lo) return whole;
+  const int a = static_cast<int>(std::floor(lo - margin_px)), b = static_cast<int>(std::ceil(hi + margin_px));
+  const int need = (b - a + 1 + 15) / 16 * 16;
+  if (need >= whole.num_disparities) return whole;
+  const int first = std::clamp(a - (need - (b - a + 1)) / 2, whole.min_disparity,
+                               whole.min_disparity + whole.num_disparities - need);
+  return {first, need};
+}
+
 RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings& s)
     : s_(s), w_(width), h_(height), r_(s.radius) {
   s_.max_radius = std::max(s_.radius, s_.max_radius);

@@ -67,7 +67,7 @@ DenseFigures run(const sim::TexturedPair& p, bool bayer, recon::scene::DepthMap&
   recon::scene::SparseResult seed;
   sr.reconstruct(sr.luma(), seed);
   recon::scene::DenseReconstructor dr(rig);
-  dr.reconstruct(sr.luma(), map, &seed);  // the band from the pair's sparse points, as naneyed runs it
+  dr.reconstruct(sr.luma(), map, &seed);  // as naneyed calls it (the band from the seed is off by default)
   const DenseFigures f = evaluate(map, p.depth, rig);
   std::printf(
       "%-22s %-5s truth-visible %5d valid %5d coverage %.1f %%  unseen %d outside %d  bad-5 %.2f %%  "

@@ -120,6 +120,16 @@ struct MatchCounts {
 inline constexpr double kResidualLowerQuantile = 0.1587;
 double effective_dof(double q, double median);
 
+// A disparity band of the integer stage: [min_disparity, min_disparity + num_disparities).
+struct DisparityBand {
+  int min_disparity = 0, num_disparities = 0;
+};
+
+// The band that holds the disparities [lo, hi] found elsewhere (the pair's sparse points) widened by
+// margin_px either side, rounded up to the SGM's 16 and centred on them, inside `whole`; `whole`
+// itself when that is no narrower or lo, hi are not finite (DenseSettings::band_from_sparse).
+DisparityBand band_around(double lo, double hi, double margin_px, const DisparityBand& whole);
+
 class RectifiedMatcher {
  public:
   RectifiedMatcher(int width, int height, const MatcherSettings& s = {});
