@@ -74,8 +74,9 @@ TEST(DenseBand, ASurfaceTheSeedMissedGetsNoWrongDepth) {
   on.band_from_sparse = true;
   recon::scene::DenseReconstructor whole(rig, on), narrowed(rig, on), unseeded(rig);
   recon::scene::DepthMap whole_map, map;
-  unseeded.reconstruct(sr.luma(), whole_map, &far);  // band_from_sparse off (the default): the seed is ignored
-  whole.reconstruct(sr.luma(), map);                 // no seed: the whole band
+  unseeded.reconstruct(sr.luma(), whole_map,
+                       &far);         // band_from_sparse off (the default): the seed is ignored
+  whole.reconstruct(sr.luma(), map);  // no seed: the whole band
   EXPECT_EQ(whole.matcher().band_size(), whole.matcher().settings().num_disparities);
   EXPECT_EQ(0, std::memcmp(map.z_mm.data(), whole_map.z_mm.data(), map.z_mm.size() * sizeof(float)));
 

@@ -84,8 +84,10 @@ TEST(DenseBandAloe, ABandFromTheSparsePointsOfAPhotograph) {
   full.match(lf, rf, valid, valid);
   // The crop's columns far enough right that both bands' first matched column lies left of them.
   const int c0 = crop_x + whole.min_disparity + whole.num_disparities;
-  const Scored in_n = score(narrowed.disparity(), q.gt, c0, q.l.cols), in_w = score(full.disparity(), q.gt, c0, q.l.cols);
-  const Scored out_n = score(narrowed.disparity(), q.gt, 0, crop_x), out_w = score(full.disparity(), q.gt, 0, crop_x);
+  const Scored in_n = score(narrowed.disparity(), q.gt, c0, q.l.cols),
+               in_w = score(full.disparity(), q.gt, c0, q.l.cols);
+  const Scored out_n = score(narrowed.disparity(), q.gt, 0, crop_x),
+               out_w = score(full.disparity(), q.gt, 0, crop_x);
   std::printf(
       "Aloe: %d sparse points, disparities %.2f-%.2f px -> band %d+%d (whole %d+%d)\n"
       "  columns %d-%d (the points' crop): given %d / %d (whole band %d), bad-2.0 %.2f %% (whole %.2f %%)\n"

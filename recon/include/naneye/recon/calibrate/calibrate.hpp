@@ -154,7 +154,8 @@ struct OddEvenValidation {
 
 // The largest odd/even depth_ratio_rms honest sigmas give by chance: 24 simulated calibrations of
 // 16 Dataset 3-like views with white 0.1 px corner noise, whose covariance holds (rms(err/sigma)
-// 1.00 over them), gave 0.49-1.45 (median 0.89; `CalibrationDepthSigma.OddEvenRatioUnderHonestNoise`).
+// 1.00 over them), gave 0.48-1.45 (median 0.89;
+// `CalibrationDepthSigma.OddEvenRatioUnderHonestNoiseStaysBelowTheScaleThreshold`).
 // One split is one draw of two calibrations' errors, hence the wide spread; above 1.5 the sigmas
 // understate. OpenCV's 13 stereo photographs give 2.64.
 inline constexpr double kHonestDepthRatioRmsMax = 1.5;
