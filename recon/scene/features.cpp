@@ -7,7 +7,7 @@
 
 namespace naneye::recon::scene {
 
-double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask) {
+double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask, const std::array<float, 9>& k) {
   const int w = img.width, h = img.height;
   double sum = 0;
   long n = 0;
@@ -21,8 +21,22 @@ double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask) {
       ++n;
     }
   if (n == 0) return 0;
-  // Immerkaer Eq. 6: sigma = sqrt(pi / 2) / 6 * mean |I * N|  (the mask's L2 norm is 6).
-  return std::sqrt(std::numbers::pi / 2) / 6.0 * sum / static_cast<double>(n);
+  // Immerkaer Eq. 6: sigma = sqrt(pi / 2) / 6 * mean |I * N| for white noise (the mask's L2 norm is
+  // 6); for noise filtered by k, |N * k| in place of 6 and |k| the pixel's share (features.hpp).
+  constexpr int kMask[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
+  double nk2 = 0, k2 = 0;
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c) {
+      double v = 0;  // (N * k) at (r, c) of its 5 x 5 support
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const int a = r - i, b = c - j;
+          if (a >= 0 && a < 3 && b >= 0 && b < 3) v += kMask[3 * i + j] * static_cast<double>(k[3 * a + b]);
+        }
+      nk2 += v * v;
+    }
+  for (float x : k) k2 += static_cast<double>(x) * x;
+  return std::sqrt(std::numbers::pi / 2) / std::sqrt(nk2 / k2) * sum / static_cast<double>(n);
 }
 
 FeatureDetector::FeatureDetector(int width, int height, const FeatureSettings& s)

@@ -175,7 +175,8 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   out.points.clear();
   out.valid_count = 0;
   const GrayView L = luma.left_view();
-  out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data());
+  out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data(),
+                                            luma.bayer ? LkSettings::binomial3() : LkSettings{}.noise_kernel);
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
   window_inverse_norms(luma.left_search_view(), s_.search_radius, usable_search_[0].data(),
                        inv_norm_[0].data(), norm_scratch_.data());

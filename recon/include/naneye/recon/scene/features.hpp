@@ -3,6 +3,7 @@
 // eigenvalue of the structure tensor, Shi & Tomasi, CVPR 1994) over the matcher's own window, one
 // feature per grid cell so that they spread over the image, kept only where the match they start
 // can reach a stated precision given the image's measured noise.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -32,8 +33,13 @@ struct Feature {
 // [1 -2 1; -2 4 -2; 1 -2 1], which cancels any locally quadratic signal (Immerkaer, "Fast noise
 // variance estimation", CVIU 64(2), 1996, Eq. 6). Over the pixels where `mask` (if given) is non-zero:
 // the caller marks the pixels whose whole 3x3 neighbourhood is usable (once per camera, not per
-// frame). Texture leaks in, so it errs high: a conservative floor.
-double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask);
+// frame). Texture leaks in, so it errs high: a conservative floor. `noise_kernel` (3x3, row-major):
+// the image's noise is white noise filtered by it (a Bayer luminance: raw_to_luminance's binomial,
+// LkSettings::binomial3), so the mask sees sigma_w |N * k| of it where a pixel holds sigma_w |k|:
+// the estimate is sqrt(pi / 2) mean|I * N| |k| / |N * k| (|N| = 6 for white noise, Eq. 6; 1 for
+// the binomial, whose white-noise reading is 1/6 of the luminance's noise).
+double estimate_noise_sigma(const GrayView& img, const std::uint8_t* mask,
+                            const std::array<float, 9>& noise_kernel = {0, 0, 0, 0, 1, 0, 0, 0, 0});
 
 // Reusable: pre-sized buffers for one image size, nothing allocated per frame.
 class FeatureDetector {
