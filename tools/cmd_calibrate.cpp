@@ -197,7 +197,8 @@ void add_calibrate_commands(CLI::App& app) {
   cmd->add_flag("--fix-k3", o->fix_k3, "Fix k3 = 0 (the paper's Datasets 1 and 2)");
   cmd->add_flag("--tangential", o->tangential, "Estimate the tangential terms p1, p2 too");
   cmd->add_flag("--cross-validate", o->cross_validate,
-                "Add the paper's 3 splits (calibrate on --train-views, reconstruct the rest) and odd/even");
+                "Add the paper's 3 splits (calibrate on --train-views, reconstruct the rest) and odd/even; "
+                "where odd/even shows the sigmas understate, the file gets calibration_sigma_scale");
   cmd->add_option("--train-views", o->train_views, "Views per cross-validation calibration")
       ->capture_default_str()
       ->check(CLI::Range(3, 1000));
