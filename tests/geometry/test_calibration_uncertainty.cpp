@@ -8,6 +8,7 @@
 #include <cmath>
 #include <random>
 
+#include "../support/correlated_covariance.hpp"
 #include "../support/paper_rig.hpp"
 #include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
@@ -42,25 +43,6 @@ StereoRig perturbed(const StereoRig& rig, const Params& dp) {
 std::vector<Eigen::Vector3d> points() {
   return {{0.0, 0.0, 20.0}, {-3.0, 2.0, 12.0},  {5.0, -4.0, 25.0},
           {0.5, 0.3, 8.0},  {20.0, 15.0, 70.0}, {-25.0, 10.0, 60.0}};
-}
-
-// A covariance with the paper's sigmas (om 1 mrad, which the paper does not give) and strong,
-// random correlations, scaled by `scale`.
-CalibrationCovariance correlated(const StereoRig& rig, double scale, unsigned seed) {
-  auto u = CalibrationUncertainty::assuming_independent_sigmas(rig);
-  Params sd = u->covariance().diagonal().cwiseSqrt();
-  sd.segment<3>(kCalibrationOm).setConstant(1e-3);
-  sd(kCalibrationLeft + 6) = sd(kCalibrationLeft + 7) = sd(kCalibrationRight + 6) =
-      sd(kCalibrationRight + 7) = 1e-4;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> n;
-  Eigen::MatrixXd A(kCalibrationParameters, kCalibrationParameters + 4);
-  for (int i = 0; i < A.size(); ++i) A(i) = n(rng);
-  Eigen::MatrixXd C = A * A.transpose();
-  const Eigen::VectorXd inv = C.diagonal().cwiseSqrt().cwiseInverse();
-  C = inv.asDiagonal() * C * inv.asDiagonal();  // a correlation matrix
-  const Params s = scale * sd;
-  return s.asDiagonal() * C * s.asDiagonal();
 }
 
 TEST(CalibrationUncertainty, ParameterJacobianMatchesFiniteDifferences) {
@@ -99,7 +81,7 @@ TEST(CalibrationUncertainty, ParameterJacobianMatchesFiniteDifferences) {
 // first order holds.
 TEST(CalibrationUncertainty, PredictsTheSpreadOfPointsTriangulatedWithDrawnRigs) {
   StereoRig rig = test::paper_d3();
-  rig.sigmas.covariance = correlated(rig, 0.1, 7);
+  rig.sigmas.covariance = test::correlated_covariance(rig, 0.1, 7);
   const auto u = CalibrationUncertainty::of(rig);
   ASSERT_TRUE(u.has_value());
   EXPECT_EQ(u->basis(), CalibrationUncertainty::Basis::full_covariance);
@@ -155,7 +137,7 @@ TEST(CalibrationUncertainty, AbsentWithoutSigmas) {
 // exactly its factor and leaves the what-if from the marginals alone.
 TEST(CalibrationUncertainty, TheCrossValidationScaleWidensEverySigmaByItsFactor) {
   StereoRig rig = test::paper_d3();
-  rig.sigmas.covariance = correlated(rig, 1.0, 3);
+  rig.sigmas.covariance = test::correlated_covariance(rig, 1.0, 3);
   const auto plain = CalibrationUncertainty::of(rig);
   const auto marginals = CalibrationUncertainty::assuming_independent_sigmas(rig);
   rig.sigmas.covariance_scale = 2.5;
