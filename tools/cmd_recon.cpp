@@ -52,26 +52,27 @@ struct ReconOptions {
 
 // DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png (issue 14): 16-bit, 0.01 mm per unit on the left raw
 // grid, 0 = no depth. A valid sigma below half a unit is written as 1 unit, so 0 keeps meaning "none".
+// With a calibration that carries its covariance also DIR/calib-sigma-NNNNNN.png, the same units: the
+// depth sigma the calibration allows (systematic, common to the map; DepthMap::calib_sigma_mm).
 void write_depth_pngs(const std::filesystem::path& dir, unsigned long long pair,
-                      const recon::scene::DepthMap& m, cv::Mat& z16, cv::Mat& s16) {
-  z16.create(m.height, m.width, CV_16UC1);
-  s16.create(m.height, m.width, CV_16UC1);
-  auto units = [](float mm, int floor) -> std::uint16_t {
-    if (!std::isfinite(mm)) return 0;
-    return static_cast<std::uint16_t>(std::clamp(std::lround(mm * 100.0), static_cast<long>(floor), 65535L));
+                      const recon::scene::DepthMap& m, bool calib_sigma, cv::Mat& u16) {
+  u16.create(m.height, m.width, CV_16UC1);
+  const auto write = [&](const char* kind, auto mm_at) {
+    for (int r = 0; r < m.height; ++r)
+      for (int c = 0; c < m.width; ++c) {
+        const float mm = mm_at(c, r);
+        u16.at<std::uint16_t>(r, c) =
+            std::isfinite(mm) ? static_cast<std::uint16_t>(std::clamp(std::lround(mm * 100.0), 1L, 65535L))
+                              : 0;
+      }
+    char name[64];
+    std::snprintf(name, sizeof name, "%s-%06llu.png", kind, pair);
+    if (!cv::imwrite((dir / name).string(), u16))
+      throw std::runtime_error("cannot write " + (dir / name).string());
   };
-  for (int r = 0; r < m.height; ++r)
-    for (int c = 0; c < m.width; ++c) {
-      z16.at<std::uint16_t>(r, c) = units(m.z_at(c, r), 1);
-      s16.at<std::uint16_t>(r, c) = units(m.sigma_at(c, r), 1);
-    }
-  char name[64];
-  std::snprintf(name, sizeof name, "depth-%06llu.png", pair);
-  if (!cv::imwrite((dir / name).string(), z16))
-    throw std::runtime_error("cannot write " + (dir / name).string());
-  std::snprintf(name, sizeof name, "sigma-%06llu.png", pair);
-  if (!cv::imwrite((dir / name).string(), s16))
-    throw std::runtime_error("cannot write " + (dir / name).string());
+  write("depth", [&m](int c, int r) { return m.z_at(c, r); });
+  write("sigma", [&m](int c, int r) { return m.sigma_at(c, r); });
+  if (calib_sigma) write("calib-sigma", [&m](int c, int r) { return m.calib_sigma_at(c, r); });
 }
 
 void print_scene_line(const recon::scene::SparseResult& s, const recon::scene::DepthMap* d) {
@@ -188,7 +189,8 @@ app::ProcessorSettings processor_settings(const ReconOptions& o) {
 // sparse and dense on one demosaic and noise estimate, the depth PNGs, the pair's report.
 class SceneStep {
  public:
-  SceneStep(const ReconOptions& o, const recon::StereoRig& rig) : depth_out_(o.depth_out) {
+  SceneStep(const ReconOptions& o, const recon::StereoRig& rig)
+      : depth_out_(o.depth_out), calib_sigma_(rig.sigmas.covariance.has_value()) {
     if (!o.scene && depth_out_.empty()) return;
     sparse_ = std::make_unique<recon::scene::SparseReconstructor>(rig);
     dense_ = std::make_unique<recon::scene::DenseReconstructor>(rig);
@@ -199,7 +201,7 @@ class SceneStep {
     sparse_->load_luma(left, right);
     sparse_->reconstruct(sparse_->luma(), sparse_result_);
     dense_->reconstruct(sparse_->luma(), depth_, &sparse_result_);
-    if (!depth_out_.empty()) write_depth_pngs(depth_out_, pair, depth_, z16_, s16_);
+    if (!depth_out_.empty()) write_depth_pngs(depth_out_, pair, depth_, calib_sigma_, u16_);
   }
   void report(Report& report, const recon::PairResult& result) const {
     report.pair(result, sparse_ ? &sparse_result_ : nullptr, sparse_ ? &depth_ : nullptr);
@@ -207,11 +209,12 @@ class SceneStep {
 
  private:
   std::string depth_out_;
+  bool calib_sigma_;  // the calibration carries its covariance: calib-sigma PNGs too
   std::unique_ptr<recon::scene::SparseReconstructor> sparse_;
   std::unique_ptr<recon::scene::DenseReconstructor> dense_;
   recon::scene::SparseResult sparse_result_;
   recon::scene::DepthMap depth_;
-  cv::Mat z16_, s16_;
+  cv::Mat u16_;
 };
 
 void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
@@ -317,7 +320,8 @@ void add_recon_commands(CLI::App& app) {
                 "(docs/scene.md); the JSON gains a \"scene\" object");
   cmd->add_option("--depth-out", o->depth_out,
                   "With the scene: write DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png per pair (16-bit, "
-                  "0.01 mm per unit on the left raw grid, 0 = no depth); implies --scene");
+                  "0.01 mm per unit on the left raw grid, 0 = no depth), and DIR/calib-sigma-NNNNNN.png "
+                  "when the calibration carries its covariance; implies --scene");
   cmd->callback([o] { run_recon(*o); });
 }
 

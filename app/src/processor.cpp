@@ -111,6 +111,7 @@ class Reconstruction final : public PairProcessor {
     if (depth) {
       depth->z_mm.reserve(map_pixels_);
       depth->sigma_mm.reserve(map_pixels_);
+      depth->calib_sigma_mm.reserve(map_pixels_);
     }
   }
   std::string_view name() const override { return name_; }

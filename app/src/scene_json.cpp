@@ -7,7 +7,7 @@
 namespace naneye::app {
 
 DepthSummary summarize(const recon::scene::DepthMap& m) {
-  return {m.valid_count, m.visible_count, m.valid_share, m.median_mm};
+  return {m.valid_count, m.visible_count, m.valid_share, m.median_mm, m.calib_sigma_median_mm};
 }
 
 nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::optional<DepthSummary>& depth) {
@@ -40,6 +40,9 @@ nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::opt
     j["depth"] = {{"valid_share", depth->valid_share},
                   {"median_mm", std::isfinite(depth->median_mm) ? nlohmann::json(depth->median_mm)
                                                                 : nlohmann::json(nullptr)},
+                  {"calib_sigma_median_mm", std::isfinite(depth->calib_sigma_median_mm)
+                                                ? nlohmann::json(depth->calib_sigma_median_mm)
+                                                : nlohmann::json(nullptr)},
                   {"valid_pixels", depth->valid_count},
                   {"visible_pixels", depth->visible_count}};
   } else {

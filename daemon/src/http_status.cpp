@@ -24,7 +24,10 @@ nlohmann::json scene_json(const PipelineStatus& s) {
   if (const auto& d = s.scene->depth)
     depth = {
         {"valid_share", d->valid_share},
-        {"median_mm", std::isfinite(d->median_mm) ? nlohmann::json(d->median_mm) : nlohmann::json(nullptr)}};
+        {"median_mm", std::isfinite(d->median_mm) ? nlohmann::json(d->median_mm) : nlohmann::json(nullptr)},
+        {"calib_sigma_median_mm", std::isfinite(d->calib_sigma_median_mm)
+                                      ? nlohmann::json(d->calib_sigma_median_mm)
+                                      : nlohmann::json(nullptr)}};
   return {{"features", s.scene->features},
           {"valid_points", s.scene->valid_points},
           {"noise_sigma_dn", s.scene->noise_sigma_dn},

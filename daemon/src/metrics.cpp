@@ -117,6 +117,10 @@ std::string metrics_text(const HttpContext& ctx, const PipelineStatus& s) {
       if (std::isfinite(s.scene->depth->median_mm))
         gauge(os, "naneye_scene_depth_median_mm", "Median dense depth of the latest pair (mm).",
               s.scene->depth->median_mm);
+      if (std::isfinite(s.scene->depth->calib_sigma_median_mm))
+        gauge(os, "naneye_scene_depth_calib_sigma_median_mm",
+              "Median of the depth sigmas the calibration's covariance allows the latest dense map (mm).",
+              s.scene->depth->calib_sigma_median_mm);
     }
   }
   histogram(os, "naneye_recon_duration_seconds", "Time the processing step took per pair.", s.recon);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "dense_rectify.hpp"
+#include "naneye/recon/geometry/calibration_sigma_table.hpp"
 #include "select.hpp"
 
 namespace naneye::recon::scene {
@@ -38,7 +39,8 @@ struct DenseReconstructor::Impl {
         s(st),
         rect(build_rectified_rig(r, active_mask(r.left), active_mask(r.right),
                                  band(r, st).min_disparity + band(r, st).num_disparities)),
-        matcher(rect.width, rect.height, band(r, st)) {
+        matcher(rect.width, rect.height, band(r, st)),
+        calib(CalibrationSigmaTable::of(r, {.z_min_mm = st.z_min_mm, .z_max_mm = st.z_max_mm})) {
     left.create(rect.height, rect.width, CV_32FC1);
     right.create(rect.height, rect.width, CV_32FC1);
     const int w = rig.left.width(), h = rig.left.height();
@@ -70,7 +72,8 @@ struct DenseReconstructor::Impl {
   cv::Mat left, right;
   std::vector<std::uint8_t> visible;
   int visible_count = 0;
-  std::vector<float> depths;  // scratch of the median
+  std::optional<CalibrationSigmaTable> calib;  // empty: the calibration has no covariance
+  std::vector<float> depths;                   // scratch of the medians
   SelectHistogram hist;
 
   // DenseSettings::band_from_sparse: the band the seed's points need, inside the whole one.
@@ -125,6 +128,7 @@ void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out, cons
   out.height = h;
   out.z_mm.resize(n);
   out.sigma_mm.resize(n);
+  out.calib_sigma_mm.resize(n);
   out.valid_count = 0;
   out.visible_count = m.visible_count;
   m.depths.clear();
@@ -134,6 +138,7 @@ void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out, cons
       const std::size_t i = static_cast<std::size_t>(r) * w + c;
       out.z_mm[i] = DepthMap::kNone;
       out.sigma_mm[i] = DepthMap::kNone;
+      out.calib_sigma_mm[i] = DepthMap::kNone;
       if (!m.visible[i]) continue;
       const float ux = rr.raw_to_rect_x.at<float>(r, c), uy = rr.raw_to_rect_y.at<float>(r, c);
       const int x0 = static_cast<int>(std::floor(ux)), y0 = static_cast<int>(std::floor(uy));
@@ -154,6 +159,7 @@ void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out, cons
       if (!(z > 0)) continue;
       out.z_mm[i] = static_cast<float>(z);
       out.sigma_mm[i] = static_cast<float>(z * sd / d);  // Z is proportional to 1 / d
+      if (m.calib) out.calib_sigma_mm[i] = m.calib->depth_sigma_mm(c, r, rr.baseline_mm / d * (back * q));
       ++out.valid_count;
       m.depths.push_back(static_cast<float>(z));
     }
@@ -161,6 +167,13 @@ void DenseReconstructor::reconstruct(const StereoLuma& luma, DepthMap& out, cons
   out.median_mm = std::numeric_limits<double>::quiet_NaN();
   if (!m.depths.empty()) {
     out.median_mm = kth_smallest(m.depths.data(), m.depths.size(), m.depths.size() / 2, m.hist);
+  }
+  out.calib_sigma_median_mm = std::numeric_limits<double>::quiet_NaN();
+  if (m.calib && !m.depths.empty()) {
+    m.depths.clear();
+    for (float c : out.calib_sigma_mm)
+      if (std::isfinite(c)) m.depths.push_back(c);
+    out.calib_sigma_median_mm = kth_smallest(m.depths.data(), m.depths.size(), m.depths.size() / 2, m.hist);
   }
 }
 

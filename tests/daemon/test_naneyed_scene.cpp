@@ -107,6 +107,10 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
   EXPECT_GT(sc["depth"]["valid_pixels"].get<int>(), 0);
   EXPECT_NEAR(metric_in_text(m->body, "naneye_scene_depth_valid_share"),
               sc["depth"]["valid_share"].get<double>(), 1e-8);
+  // No covariance, no calibration sigma of the map either: null, and no gauge (not a 0).
+  EXPECT_TRUE(sc["depth"]["calib_sigma_median_mm"].is_null());
+  EXPECT_TRUE(st["scene"]["depth"]["calib_sigma_median_mm"].is_null());
+  EXPECT_EQ(m->body.find("naneye_scene_depth_calib_sigma_median_mm"), std::string::npos);
 
   // The 16-bit map: Z in 0.01 mm on the left raw grid, 0 = none; its count of non-zero pixels is the
   // result's valid_pixels, and /v1/depth/at reads the same map.
@@ -198,6 +202,15 @@ TEST_F(NaneyedTest, SceneAnswersCarryTheCalibrationSigmaWhenTheFileHasACovarianc
     ++given;
   }
   EXPECT_GE(given, 300);
+  // The dense map's calibration sigmas: their median in /v1/depth, /v1/status and /metrics alike.
+  const auto& median = d["scene"]["depth"]["calib_sigma_median_mm"];
+  ASSERT_TRUE(median.is_number()) << d["scene"]["depth"].dump();
+  EXPECT_GT(median.get<double>(), 0.0);
+  EXPECT_EQ(get_json("/v1/status")["scene"]["depth"]["calib_sigma_median_mm"], median);
+  const auto metrics = client->Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_NEAR(metric_in_text(metrics->body, "naneye_scene_depth_calib_sigma_median_mm"), median.get<double>(),
+              1e-6 * median.get<double>());
   int answered = 0;
   for (int v = 60; v < 200; v += 20)
     for (int u_px = 60; u_px < 200; u_px += 20) {

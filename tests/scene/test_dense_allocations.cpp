@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
+#include <utility>
 
+#include "../support/correlated_covariance.hpp"
 #include "../support/heap_count.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "scene_fixture.hpp"
@@ -19,11 +21,16 @@ TEST(DenseAllocations, NoneOncePairsFlow) {
   // As the processor runs it (app/src/processor.cpp): OpenCV on the calling thread (its pool's
   // bookkeeping allocates, should any cv:: call on the path use it).
   cv::setNumThreads(1);
-  for (bool bayer : {false, true}) {
+  // The third case: a calibration with its covariance, so that every depth also gets its
+  // calibration sigma (CalibrationSigmaTable, the exact propagation beyond the table's band).
+  for (const auto& [bayer, covariance] :
+       {std::pair{false, false}, std::pair{true, false}, std::pair{false, true}}) {
     const auto& a = test::textured_pair("plane", bayer);
     const auto& b = test::textured_pair("sphere", bayer);
-    recon::scene::SparseReconstructor sr(test::paper_d3());
-    recon::scene::DenseReconstructor dr(test::paper_d3());
+    recon::StereoRig rig = test::paper_d3();
+    if (covariance) rig.sigmas.covariance = test::correlated_covariance(rig, 0.1, 5);
+    recon::scene::SparseReconstructor sr(rig);
+    recon::scene::DenseReconstructor dr(rig);
     recon::scene::DepthMap map;
     sr.load_luma(sim::raw_view(a.left, bayer), sim::raw_view(a.right, bayer));
     dr.reconstruct(sr.luma(), map);  // warm-up
@@ -37,7 +44,8 @@ TEST(DenseAllocations, NoneOncePairsFlow) {
       allocations += test::heap_allocations() - before;
       valid += map.valid_count;
     }
-    EXPECT_EQ(allocations, 0) << (bayer ? "bayer" : "mono");
+    EXPECT_EQ(allocations, 0) << (bayer ? "bayer" : "mono") << (covariance ? ", with covariance" : "");
+    EXPECT_EQ(std::isfinite(map.calib_sigma_median_mm), covariance);
     EXPECT_GT(valid, 20000);  // the pairs were really reconstructed
   }
 }

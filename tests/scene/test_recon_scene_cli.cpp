@@ -11,7 +11,9 @@
 #include <sstream>
 #include <vector>
 
+#include "../support/correlated_covariance.hpp"
 #include "../tools/run_cli.hpp"
+#include "naneye/recon/camera/calibration_io.hpp"
 #include "scene_fixture.hpp"
 
 namespace naneye {
@@ -81,6 +83,10 @@ TEST(ReconSceneCli, SceneObjectPerPairAgreesWithTruth) {
     EXPECT_LE(bad, 0.01 * given);
     std::nth_element(zs.begin(), zs.begin() + static_cast<long>(zs.size() / 2), zs.end());
     EXPECT_NEAR(d.at("median_mm").get<double>(), zs[zs.size() / 2], 0.011);  // the PNG's 0.01 mm rounding
+    // The paper's file has no covariance: no calibration sigma, and no PNG of it.
+    EXPECT_TRUE(d.at("calib_sigma_median_mm").is_null());
+    std::snprintf(name, sizeof name, "calib-sigma-%06zu.png", pair);
+    EXPECT_FALSE(std::filesystem::exists(dir / "depth" / name));
     int valid = 0, off = 0;
     for (const auto& p : s.at("points")) {
       if (!p.at("valid").get<bool>()) {
@@ -102,6 +108,43 @@ TEST(ReconSceneCli, SceneObjectPerPairAgreesWithTruth) {
   }
   EXPECT_EQ(pair, truth.size());
   EXPECT_TRUE(summary);
+  std::filesystem::remove_all(dir);
+}
+
+// With a calibration that carries its covariance, a third PNG per pair: the depth sigma the
+// calibration allows, given exactly where a depth is, its median in the JSON.
+TEST(ReconSceneCli, CalibrationSigmaMapWhenTheFileHasACovariance) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("naneye-scene-cli-cov-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  recon::StereoRig rig = test::paper_d3();
+  rig.sigmas.covariance = test::correlated_covariance(rig, 0.1, 5);
+  const auto calib = dir / "with-covariance.yaml";
+  recon::save_rig(rig, calib);
+  const auto raw = dir / "capture.raw";
+  sim::write_textured_capture(raw, test::textured_renderer(false), {*sim::textured_preset("sphere")}, 3);
+  const test::CliResult r = test::run_cli("recon --calib " + calib.string() + " --input " + raw.string() +
+                                          " --json --depth-out " + (dir / "depth").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out.substr(0, r.out.find('\n')));
+  const auto& d = j.at("scene").at("depth");
+  const cv::Mat z16 = cv::imread((dir / "depth" / "depth-000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat c16 = cv::imread((dir / "depth" / "calib-sigma-000000.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(c16.type(), CV_16UC1);
+  ASSERT_EQ(c16.size(), z16.size());
+  std::vector<double> sigmas;
+  int mismatched = 0;
+  for (int v = 0; v < z16.rows; ++v)
+    for (int u = 0; u < z16.cols; ++u) {
+      mismatched += (z16.at<std::uint16_t>(v, u) == 0) != (c16.at<std::uint16_t>(v, u) == 0);
+      if (c16.at<std::uint16_t>(v, u)) sigmas.push_back(c16.at<std::uint16_t>(v, u) / 100.0);
+    }
+  EXPECT_EQ(mismatched, 0);
+  ASSERT_EQ(static_cast<int>(sigmas.size()), d.at("valid_pixels").get<int>());
+  std::nth_element(sigmas.begin(), sigmas.begin() + static_cast<long>(sigmas.size() / 2), sigmas.end());
+  ASSERT_TRUE(d.at("calib_sigma_median_mm").is_number());
+  EXPECT_NEAR(d.at("calib_sigma_median_mm").get<double>(), sigmas[sigmas.size() / 2],
+              0.0051);  // 0.01 mm units
   std::filesystem::remove_all(dir);
 }
 

@@ -4,7 +4,8 @@
 // {"points": [{"id", "left_px", "right_px", "xyz_mm", "depth_sigma_mm", "calib_sigma_mm", "valid",
 //              "status"}],
 //  "valid_points", "noise_sigma_dn",
-//  "depth": {"valid_share", "median_mm", "valid_pixels", "visible_pixels"} or null without a dense map}.
+//  "depth": {"valid_share", "median_mm", "calib_sigma_median_mm", "valid_pixels", "visible_pixels"} or
+//           null without a dense map}.
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -20,6 +21,8 @@ struct DepthSummary {
   int visible_count = 0;  // pixels both eyes can see
   double valid_share = 0;
   double median_mm = std::numeric_limits<double>::quiet_NaN();  // NaN when no pixel has a depth
+  // Of the depths' calibration sigmas (DepthMap::calib_sigma_mm); NaN without a covariance.
+  double calib_sigma_median_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
 DepthSummary summarize(const recon::scene::DepthMap& m);

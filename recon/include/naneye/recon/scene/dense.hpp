@@ -48,14 +48,21 @@ struct DepthMap {
   static constexpr float kNone = std::numeric_limits<float>::quiet_NaN();
   int width = 0, height = 0;    // the left raw grid
   std::vector<float> z_mm;      // row-major, width * height; NaN = no depth
-  std::vector<float> sigma_mm;  // 1-sigma of z_mm; NaN where z_mm is NaN
-  int valid_count = 0;          // pixels with a depth
-  int visible_count = 0;        // pixels both eyes can see (inside both domains, in both images)
-  double valid_share = 0;       // valid_count / visible_count (0 when nothing is visible)
-  double median_mm = std::numeric_limits<double>::quiet_NaN();  // of the valid depths
+  std::vector<float> sigma_mm;  // 1-sigma of z_mm from the match (noise, texture); NaN where z_mm is NaN
+  // The depth sigma the calibration's covariance allows at each depth (CalibrationSigmaTable):
+  // systematic, common to the whole map (one calibration), so it does not shrink when depths are
+  // averaged, unlike sigma_mm. NaN where z_mm is NaN and everywhere when the calibration carries no
+  // covariance (the paper's files: marginal sigmas only, docs/calibration.md).
+  std::vector<float> calib_sigma_mm;
+  int valid_count = 0;     // pixels with a depth
+  int visible_count = 0;   // pixels both eyes can see (inside both domains, in both images)
+  double valid_share = 0;  // valid_count / visible_count (0 when nothing is visible)
+  double median_mm = std::numeric_limits<double>::quiet_NaN();              // of the valid depths
+  double calib_sigma_median_mm = std::numeric_limits<double>::quiet_NaN();  // of calib_sigma_mm's valid ones
   bool empty() const { return valid_count == 0; }
   float z_at(int u, int v) const { return z_mm[static_cast<std::size_t>(v) * width + u]; }
   float sigma_at(int u, int v) const { return sigma_mm[static_cast<std::size_t>(v) * width + u]; }
+  float calib_sigma_at(int u, int v) const { return calib_sigma_mm[static_cast<std::size_t>(v) * width + u]; }
 };
 
 class DenseReconstructor {
