@@ -12,6 +12,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/recon/geometry/calibration_sigma_table.hpp"
 #include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/triangulation.hpp"
 
@@ -269,9 +272,36 @@ void BM_CalibrationDepthSigma(benchmark::State& state) {
   set_per_point(state, d.X.size());
 }
 
+// The same per dense pixel from the table the dense path reads (calibration_sigma_table.hpp): each
+// point looked up at its rounded left pixel. build_ms: the table's construction, once per rig.
+void BM_CalibrationSigmaTable(benchmark::State& state) {
+  const Data& d = data();
+  StereoRig rig = d.rig;
+  rig.sigmas.covariance =
+      naneye::recon::CalibrationUncertainty::assuming_independent_sigmas(rig)->covariance();
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto table = naneye::recon::CalibrationSigmaTable::of(rig);
+  const double build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<int> u(d.X.size()), v(d.X.size());
+  for (std::size_t i = 0; i < d.X.size(); ++i) {
+    u[i] = static_cast<int>(std::lround(d.pl[i].x()));
+    v[i] = static_cast<int>(std::lround(d.pl[i].y()));
+  }
+  std::vector<float> out(d.X.size());
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < d.X.size(); ++i) out[i] = table->depth_sigma_mm(u[i], v[i], d.X[i]);
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  set_per_point(state, d.X.size());
+  state.counters["build_ms"] = build_ms;
+}
+
 }  // namespace
 
 BENCHMARK(BM_CalibrationDepthSigma)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CalibrationSigmaTable)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Undistort_Ours)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Undistort_OpenCV_Default)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Undistort_OpenCV_Count30_Eps1e6)->Unit(benchmark::kMillisecond);
