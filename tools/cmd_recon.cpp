@@ -21,6 +21,7 @@
 #include "cli_inputs.hpp"
 #include "commands.hpp"
 #include "image_pairs.hpp"
+#include "naneye/app/depth_png.hpp"
 #include "naneye/app/processor.hpp"
 #include "naneye/app/result_json.hpp"
 #include "naneye/app/scene_json.hpp"
@@ -50,29 +51,22 @@ struct ReconOptions {
   std::string depth_out;
 };
 
-// DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png (issue 14): 16-bit, 0.01 mm per unit on the left raw
-// grid, 0 = no depth. A valid sigma below half a unit is written as 1 unit, so 0 keeps meaning "none".
-// With a calibration that carries its covariance also DIR/calib-sigma-NNNNNN.png, the same units: the
-// depth sigma the calibration allows (systematic, common to the map; DepthMap::calib_sigma_mm).
+// DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png (issue 14; app/depth_png.hpp's format: 16-bit,
+// 0.01 mm per unit on the left raw grid, 0 = none). With a calibration that carries its covariance
+// also DIR/calib-sigma-NNNNNN.png: the depth sigma the calibration allows (systematic, common to the
+// map; DepthMap::calib_sigma_mm).
 void write_depth_pngs(const std::filesystem::path& dir, unsigned long long pair,
                       const recon::scene::DepthMap& m, bool calib_sigma, cv::Mat& u16) {
-  u16.create(m.height, m.width, CV_16UC1);
-  const auto write = [&](const char* kind, auto mm_at) {
-    for (int r = 0; r < m.height; ++r)
-      for (int c = 0; c < m.width; ++c) {
-        const float mm = mm_at(c, r);
-        u16.at<std::uint16_t>(r, c) =
-            std::isfinite(mm) ? static_cast<std::uint16_t>(std::clamp(std::lround(mm * 100.0), 1L, 65535L))
-                              : 0;
-      }
+  const auto write = [&](app::DepthLayer layer, const char* file) {
+    app::encode_depth_layer(app::layer_values(m, layer), m.width, m.height, layer, u16);
     char name[64];
-    std::snprintf(name, sizeof name, "%s-%06llu.png", kind, pair);
+    std::snprintf(name, sizeof name, "%s-%06llu.png", file, pair);
     if (!cv::imwrite((dir / name).string(), u16))
       throw std::runtime_error("cannot write " + (dir / name).string());
   };
-  write("depth", [&m](int c, int r) { return m.z_at(c, r); });
-  write("sigma", [&m](int c, int r) { return m.sigma_at(c, r); });
-  if (calib_sigma) write("calib-sigma", [&m](int c, int r) { return m.calib_sigma_at(c, r); });
+  write(app::DepthLayer::depth, "depth");
+  write(app::DepthLayer::sigma, "sigma");
+  if (calib_sigma) write(app::DepthLayer::calib_sigma, "calib-sigma");
 }
 
 void print_scene_line(const recon::scene::SparseResult& s, const recon::scene::DepthMap* d) {

@@ -1,19 +1,20 @@
-// /v1/depth.png (the dense map as 16-bit PNG, Z in 0.01 mm on the left raw grid, 0 = no depth) and
-// /v1/depth/colour.png (the same colour-mapped, with a scale bar in mm below it). Both of the
-// latest result's own map: a map is never served for another pair than the one it was computed on.
+// /v1/depth.png (the dense map as 16-bit PNG, Z in 0.01 mm on the left raw grid, 0 = no depth; or,
+// with ?layer=, its match or calibration sigmas in the same units) and /v1/depth/colour.png (the
+// depth colour-mapped, with a scale bar in mm below it). Both of the latest result's own map: a map
+// is never served for another pair than the one it was computed on.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
 #include "http_internal.hpp"
+#include "naneye/app/depth_png.hpp"
 #include "png_encode.hpp"
 
 namespace naneye::daemon::http {
 namespace {
 
-constexpr double kUnitsPerMm = 100.0;  // depth.png: 0.01 mm per unit (issue 14's --depth-out format)
-constexpr int kBarHeight = 36;         // px below the map: the colour bar and its labels
+constexpr int kBarHeight = 36;  // px below the map: the colour bar and its labels
 // The colour scale spans these quantiles of the pair's depths: a few stray far or near pixels must
 // not squeeze every other depth into one colour.
 constexpr double kScaleLowQuantile = 0.01, kScaleHighQuantile = 0.99;
@@ -32,12 +33,15 @@ cv::Vec3b turbo(double t) {
 struct MapCopy {
   std::uint64_t pair = 0;
   int width = 0, height = 0;
-  std::vector<float> z;
+  std::vector<float> z;      // the layer asked for (depth unless told otherwise)
+  bool calib_sigma = false;  // the map carries calibration sigmas (its calibration had a covariance)
+  int valid_count = 0;
 };
 
-// Copies the latest result's map out of its slot (the slot stays pinned only for the copy). False
-// with the error sent when there is none.
-bool latest_map(HttpContext& ctx, httplib::Response& res, MapCopy& out) {
+// Copies one layer of the latest result's map out of its slot (the slot stays pinned only for the
+// copy). False with the error sent when there is none.
+bool latest_map(HttpContext& ctx, httplib::Response& res, MapCopy& out,
+                app::DepthLayer layer = app::DepthLayer::depth) {
   bool has_dense = false, scene = false, held = false;
   const bool have = read_latest_with_map(*ctx.pipeline, [&](const Published& p, const DepthSlot* d) {
     out.pair = p.result.pair;
@@ -47,7 +51,10 @@ bool latest_map(HttpContext& ctx, httplib::Response& res, MapCopy& out) {
     held = true;
     out.width = d->map.width;
     out.height = d->map.height;
-    out.z.assign(d->map.z_mm.begin(), d->map.z_mm.end());
+    const auto& v = app::layer_values(d->map, layer);
+    out.z.assign(v.begin(), v.end());
+    out.calib_sigma = std::isfinite(d->map.calib_sigma_median_mm);
+    out.valid_count = d->map.valid_count;
   });
   if (!have) {
     send_error(res, 503, "no_result", "no stereo pair has been reconstructed yet");
@@ -85,20 +92,25 @@ std::string mm_label(double v) {
 
 void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx) {
   svr.Get("/v1/depth.png", [&ctx](const httplib::Request& req, httplib::Response& res) {
-    if (!only_params(req, res, {})) return;
+    if (!only_params(req, res, {"layer"})) return;
+    const std::string name = req.has_param("layer") ? req.get_param_value("layer") : "depth";
+    const auto layer = app::depth_layer_from_string(name);
+    if (!layer)
+      return send_error(res, 400, "bad_parameter",
+                        "layer must be depth, sigma or calib_sigma, got \"" + name + "\"");
     MapCopy m;
-    if (!latest_map(ctx, res, m)) return;
-    cv::Mat img(m.height, m.width, CV_16UC1);
-    for (int v = 0; v < m.height; ++v)
-      for (int u = 0; u < m.width; ++u) {
-        const float z = m.z[static_cast<std::size_t>(v) * m.width + u];
-        // 0 is "no depth"; a depth too far for 16 bits (655 mm, beyond any searched) is left out
-        // rather than clipped to a wrong value.
-        const double units = std::isfinite(z) ? std::round(z * kUnitsPerMm) : 0.0;
-        img.at<std::uint16_t>(v, u) = units >= 1 && units <= 65535 ? static_cast<std::uint16_t>(units) : 0;
-      }
+    if (!latest_map(ctx, res, m, *layer)) return;
+    // A map with depths but no calibration sigma had a calibration without a covariance (a map
+    // without any depth has none to give either way: then the calibration in use decides).
+    if (*layer == app::DepthLayer::calib_sigma && !m.calib_sigma &&
+        (m.valid_count > 0 || !ctx.pipeline->rig()->sigmas.covariance))
+      return send_error(res, 422, "no_calibration_covariance",
+                        "the calibration carries no covariance (the paper's files: marginal sigmas only), so "
+                        "there is no calibration sigma to give; `naneye calibrate` writes one");
+    cv::Mat img;
+    app::encode_depth_layer(m.z, m.width, m.height, *layer, img);
     res.set_header("X-Naneye-Depth-Unit-Mm", "0.01");
-    send_png(res, img, m.pair, "depth");
+    send_png(res, img, m.pair, *layer == app::DepthLayer::depth ? "depth" : app::to_string(*layer));
   });
 
   svr.Get("/v1/depth/colour.png", [&ctx](const httplib::Request& req, httplib::Response& res) {

@@ -124,6 +124,17 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
   ASSERT_EQ(z16.cols, 250);
   ASSERT_EQ(z16.rows, 250);
   EXPECT_EQ(cv::countNonZero(z16), sc["depth"]["valid_pixels"].get<int>());
+  // The match sigmas in the same units (a sigma exactly where a depth is); no calibration sigmas
+  // without a covariance; an unknown layer is refused.
+  auto sigma_png = client->Get("/v1/depth.png?layer=sigma");
+  ASSERT_TRUE(sigma_png);
+  ASSERT_EQ(sigma_png->status, 200) << sigma_png->body;
+  const cv::Mat s16 = cv::imdecode(std::vector<std::uint8_t>(sigma_png->body.begin(), sigma_png->body.end()),
+                                   cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(s16.type(), CV_16UC1);
+  EXPECT_EQ(cv::countNonZero((s16 > 0) != (z16 > 0)), 0);
+  EXPECT_EQ(get_json("/v1/depth.png?layer=calib_sigma", 422)["error"], "no_calibration_covariance");
+  EXPECT_EQ(get_json("/v1/depth.png?layer=disparity", 400)["error"], "bad_parameter");
   int asked = 0, dense = 0;
   double dense_rel2 = 0;
   for (int v = 20; v < 230; v += 11)
@@ -147,6 +158,8 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
       EXPECT_GT(j["depth_sigma_mm"].get<double>(), 0.0);
       EXPECT_TRUE(j["calib_sigma_mm"].is_null());
       EXPECT_NEAR(stored, std::round(j["depth_mm"].get<double>() * 100), 0.5);
+      EXPECT_NEAR(s16.at<std::uint16_t>(v, u),
+                  std::max(1.0, std::round(j["depth_sigma_mm"].get<double>() * 100)), 0.5);
       if (const auto truth =
               scene_renderer(false).truth_depth_at(test_scene(1).surface, Eigen::Vector2d(u, v))) {
         dense_rel2 += std::pow(j["depth_mm"].get<double>() / *truth - 1, 2);
@@ -207,6 +220,23 @@ TEST_F(NaneyedTest, SceneAnswersCarryTheCalibrationSigmaWhenTheFileHasACovarianc
   ASSERT_TRUE(median.is_number()) << d["scene"]["depth"].dump();
   EXPECT_GT(median.get<double>(), 0.0);
   EXPECT_EQ(get_json("/v1/status")["scene"]["depth"]["calib_sigma_median_mm"], median);
+  // The map of them: 0.01 mm per unit, exactly where a depth is, their median the JSON's.
+  const auto layer = [&](const char* path) {
+    const auto r = client->Get(path);
+    EXPECT_TRUE(r && r->status == 200) << path;
+    return r ? cv::imdecode(std::vector<std::uint8_t>(r->body.begin(), r->body.end()), cv::IMREAD_UNCHANGED)
+             : cv::Mat();
+  };
+  const cv::Mat z16 = layer("/v1/depth.png"), c16 = layer("/v1/depth.png?layer=calib_sigma");
+  ASSERT_EQ(c16.type(), CV_16UC1);
+  EXPECT_EQ(cv::countNonZero((c16 > 0) != (z16 > 0)), 0);
+  std::vector<std::uint16_t> units;
+  for (int v = 0; v < c16.rows; ++v)
+    for (int u = 0; u < c16.cols; ++u)
+      if (c16.at<std::uint16_t>(v, u)) units.push_back(c16.at<std::uint16_t>(v, u));
+  ASSERT_FALSE(units.empty());
+  std::nth_element(units.begin(), units.begin() + static_cast<long>(units.size() / 2), units.end());
+  EXPECT_NEAR(units[units.size() / 2] / 100.0, median.get<double>(), 0.0051);
   const auto metrics = client->Get("/metrics");
   ASSERT_TRUE(metrics);
   EXPECT_NEAR(metric_in_text(metrics->body, "naneye_scene_depth_calib_sigma_median_mm"), median.get<double>(),
