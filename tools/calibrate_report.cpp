@@ -66,6 +66,11 @@ void print_odd_even(const recon::OddEvenValidation& v) {
       "sigma is honest;\n  %.2f with the marginal sigmas taken as independent)\n",
       v.depth_corners, 100.0 * v.depth_median_relative, 100.0 * v.depth_sigma_median_relative,
       v.depth_ratio_rms, v.depth_ratio_rms_independent);
+  std::printf(
+      "  the same test over %zu ways to halve the views (odd/even, index mod 4 {0,1}/{2,3}, {0,3}/{1,2}):",
+      v.split_depth_ratio_rms.size());
+  for (double r : v.split_depth_ratio_rms) std::printf(" %.2f", r);
+  std::printf(", pooled over %d corners %.2f\n", v.pooled_depth_corners, v.pooled_depth_ratio_rms);
   if (v.sigma_scale > 1.0)
     std::printf(
         "  beyond the %.1f that honest sigmas reach by chance: the calibration's sigmas understate, and the "
@@ -134,6 +139,9 @@ nlohmann::json report_json(const recon::CalibrationResult& res, const CollectedV
                   {"ratio_rms_marginals_independent", odd_even->depth_ratio_rms_independent},
                   {"median_relative_difference", odd_even->depth_median_relative},
                   {"median_relative_combined_sigma", odd_even->depth_sigma_median_relative},
+                  {"split_ratio_rms", odd_even->split_depth_ratio_rms},
+                  {"pooled_corners", odd_even->pooled_depth_corners},
+                  {"pooled_ratio_rms", odd_even->pooled_depth_ratio_rms},
                   {"sigma_scale", odd_even->sigma_scale}};
     for (const auto& c : odd_even->parameters)
       o["parameters"].push_back({{"name", c.name},

@@ -147,7 +147,7 @@ void run_calibrate(const CalibrateOptions& o) {
         true);
     splits = std::make_unique<recon::SplitValidation>(
         recon::cross_validate_splits(views.views, board, settings, 3, o.train_views));
-    progress.update(0.6, "cross-validating: odd against even views", true);
+    progress.update(0.6, "cross-validating: halves of the views against each other", true);
     odd_even = std::make_unique<recon::OddEvenValidation>(
         recon::cross_validate_odd_even(views.views, board, settings));
     progress.done("cross-validation done");
@@ -164,9 +164,9 @@ void run_calibrate(const CalibrateOptions& o) {
   recon::StereoRig rig = res.rig;
   if (odd_even && odd_even->ok && rig.sigmas.covariance) {
     rig.sigmas.covariance_scale = odd_even->sigma_scale;
-    provenance << "# cross-validation (odd against even views): depth ratio RMS " << odd_even->depth_ratio_rms
-               << " over " << odd_even->depth_corners << " corners; calibration_sigma_scale "
-               << odd_even->sigma_scale << "\n";
+    provenance << "# cross-validation (odd against even views and two more halvings): depth ratio RMS "
+               << odd_even->pooled_depth_ratio_rms << " over " << odd_even->pooled_depth_corners
+               << " corners; calibration_sigma_scale " << odd_even->sigma_scale << "\n";
   }
   write_atomically(rig, o.output, provenance.str());
   print_report(res, views, splits.get(), odd_even.get(), settings, {o.json, o.output});
@@ -197,8 +197,9 @@ void add_calibrate_commands(CLI::App& app) {
   cmd->add_flag("--fix-k3", o->fix_k3, "Fix k3 = 0 (the paper's Datasets 1 and 2)");
   cmd->add_flag("--tangential", o->tangential, "Estimate the tangential terms p1, p2 too");
   cmd->add_flag("--cross-validate", o->cross_validate,
-                "Add the paper's 3 splits (calibrate on --train-views, reconstruct the rest) and odd/even; "
-                "where odd/even shows the sigmas understate, the file gets calibration_sigma_scale");
+                "Add the paper's 3 splits (calibrate on --train-views, reconstruct the rest) and three "
+                "halvings (odd/even, index mod 4); where their depths show the sigmas understate, the file "
+                "gets calibration_sigma_scale");
   cmd->add_option("--train-views", o->train_views, "Views per cross-validation calibration")
       ->capture_default_str()
       ->check(CLI::Range(3, 1000));

@@ -118,34 +118,76 @@ double median(std::vector<double> v) {
   return *mid;
 }
 
-void compare_depths(std::span<const CalibrationView> views, OddEvenValidation& out) {
-  const auto odd = CalibrationUncertainty::of(out.odd.rig), even = CalibrationUncertainty::of(out.even.rig);
-  const auto odd_ind = CalibrationUncertainty::assuming_independent_sigmas(out.odd.rig);
-  const auto even_ind = CalibrationUncertainty::assuming_independent_sigmas(out.even.rig);
-  if (!odd || !even || !odd_ind || !even_ind) return;
-  double sum = 0, sum_ind = 0;
+// Every corner both eyes saw in any view, triangulated (refined) with rigs a and b, against the
+// depth sigmas each rig's covariance allows (and their marginals taken as independent).
+struct DepthComparison {
+  bool ok = false;
+  double sum = 0, sum_independent = 0;  // of (dZ / combined sigma)^2
   std::vector<double> relative, sigma_relative;
+  double ratio_rms() const { return std::sqrt(sum / static_cast<double>(relative.size())); }
+};
+
+DepthComparison compare_depths(std::span<const CalibrationView> views, const StereoRig& rig_a,
+                               const StereoRig& rig_b) {
+  DepthComparison out;
+  const auto a_u = CalibrationUncertainty::of(rig_a), b_u = CalibrationUncertainty::of(rig_b);
+  const auto a_ind = CalibrationUncertainty::assuming_independent_sigmas(rig_a);
+  const auto b_ind = CalibrationUncertainty::assuming_independent_sigmas(rig_b);
+  if (!a_u || !b_u || !a_ind || !b_ind) return out;
   for (const CalibrationView& v : views)
     for (const BoardCorner& l : v.left)
       for (const BoardCorner& r : v.right) {
         if (r.row != l.row || r.col != l.col) continue;
-        const Triangulated a = triangulate(out.odd.rig, l.px, r.px, TriangulationMethod::refined, 0.0);
-        const Triangulated b = triangulate(out.even.rig, l.px, r.px, TriangulationMethod::refined, 0.0);
+        const Triangulated a = triangulate(rig_a, l.px, r.px, TriangulationMethod::refined, 0.0);
+        const Triangulated b = triangulate(rig_b, l.px, r.px, TriangulationMethod::refined, 0.0);
         if (!a.ok() || !b.ok()) continue;
         const double dz = a.X.z() - b.X.z(), z = 0.5 * (a.X.z() + b.X.z());
-        const double combined = std::hypot(odd->depth_sigma_mm(a.X), even->depth_sigma_mm(b.X));
-        sum += (dz / combined) * (dz / combined);
-        sum_ind += std::pow(dz / std::hypot(odd_ind->depth_sigma_mm(a.X), even_ind->depth_sigma_mm(b.X)), 2);
-        relative.push_back(std::abs(dz) / z);
-        sigma_relative.push_back(combined / z);
+        const double combined = std::hypot(a_u->depth_sigma_mm(a.X), b_u->depth_sigma_mm(b.X));
+        out.sum += (dz / combined) * (dz / combined);
+        out.sum_independent +=
+            std::pow(dz / std::hypot(a_ind->depth_sigma_mm(a.X), b_ind->depth_sigma_mm(b.X)), 2);
+        out.relative.push_back(std::abs(dz) / z);
+        out.sigma_relative.push_back(combined / z);
       }
-  out.depth_corners = static_cast<int>(relative.size());
-  if (relative.empty()) return;
-  out.depth_ratio_rms = std::sqrt(sum / static_cast<double>(relative.size()));
-  out.depth_ratio_rms_independent = std::sqrt(sum_ind / static_cast<double>(relative.size()));
-  out.depth_median_relative = median(relative);
-  out.depth_sigma_median_relative = median(sigma_relative);
-  if (out.depth_ratio_rms > kHonestDepthRatioRmsMax) out.sigma_scale = out.depth_ratio_rms;
+  out.ok = !out.relative.empty();
+  return out;
+}
+
+// The two halvings by view index mod 4 beside odd/even (OddEvenValidation): {0, 1} against {2, 3},
+// and {0, 3} against {1, 2}.
+bool in_first_half(std::size_t i, int halving) {
+  const std::size_t m = i % 4;
+  return halving == 0 ? (m == 0 || m == 1) : (m == 0 || m == 3);
+}
+
+void compare_depths(std::span<const CalibrationView> views, const BoardGeometry& board,
+                    const CalibrationSettings& settings, OddEvenValidation& out) {
+  const DepthComparison oe = compare_depths(views, out.odd.rig, out.even.rig);
+  if (!oe.ok) return;
+  out.depth_corners = static_cast<int>(oe.relative.size());
+  out.depth_ratio_rms = oe.ratio_rms();
+  out.depth_ratio_rms_independent = std::sqrt(oe.sum_independent / static_cast<double>(oe.relative.size()));
+  out.depth_median_relative = median(oe.relative);
+  out.depth_sigma_median_relative = median(oe.sigma_relative);
+  out.split_depth_ratio_rms = {out.depth_ratio_rms};
+  double sum = oe.sum;
+  std::size_t corners = oe.relative.size();
+  for (int halving = 0; halving < 2; ++halving) {
+    std::vector<CalibrationView> halves[2];
+    for (std::size_t i = 0; i < views.size(); ++i)
+      halves[in_first_half(i, halving) ? 0 : 1].push_back(views[i]);
+    const CalibrationResult a = calibrate_stereo(halves[0], board, settings);
+    const CalibrationResult b = calibrate_stereo(halves[1], board, settings);
+    if (!a.ok || !b.ok) continue;  // too few views in a half: the splits that calibrated decide
+    const DepthComparison c = compare_depths(views, a.rig, b.rig);
+    if (!c.ok) continue;
+    out.split_depth_ratio_rms.push_back(c.ratio_rms());
+    sum += c.sum;
+    corners += c.relative.size();
+  }
+  out.pooled_depth_corners = static_cast<int>(corners);
+  out.pooled_depth_ratio_rms = std::sqrt(sum / static_cast<double>(corners));
+  if (out.pooled_depth_ratio_rms > kHonestDepthRatioRmsMax) out.sigma_scale = out.pooled_depth_ratio_rms;
 }
 
 }  // namespace
@@ -182,7 +224,7 @@ OddEvenValidation cross_validate_odd_even(std::span<const CalibrationView> views
     out.parameters.push_back(c);
   }
   out.ratio_rms = free ? std::sqrt(sum / free) : 0.0;
-  compare_depths(views, out);
+  compare_depths(views, board, settings, out);
   out.ok = true;
   return out;
 }

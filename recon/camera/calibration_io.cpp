@@ -359,7 +359,8 @@ void save_rig(const StereoRig& rig, const std::filesystem::path& file) {
     if (s.covariance_scale != 1.0) {
       fs.writeComment(
           "The factor its sigmas understate the calibration's errors by, measured by cross-validation "
-          "when it was made (odd against even views, docs/calibration.md); applied to every calibration "
+          "when it was made (halves of the views against each other, docs/calibration.md); applied to every "
+          "calibration "
           "sigma.");
       fs << "calibration_sigma_scale" << s.covariance_scale;
     }

@@ -106,10 +106,17 @@ TEST(CalibratePhotographs, CrossValidationWidensTheUnderstatedSigmas) {
   const auto r = naneye::test::run_cli(args + checked + " --cross-validate");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto depth = nlohmann::json::parse(r.out)["cross_validation"]["odd_even"]["depth"];
-  const double ratio = depth["ratio_rms"].get<double>(), scale = depth["sigma_scale"].get<double>();
-  std::printf("photographs: odd/even depth ratio RMS %.2f, sigma scale written %.2f\n", ratio, scale);
+  const double ratio = depth["ratio_rms"].get<double>(), pooled = depth["pooled_ratio_rms"].get<double>(),
+               scale = depth["sigma_scale"].get<double>();
+  std::printf(
+      "photographs: odd/even depth ratio RMS %.2f, over the three halvings %s, pooled %.2f; sigma "
+      "scale written %.2f\n",
+      ratio, depth["split_ratio_rms"].dump().c_str(), pooled, scale);
   EXPECT_GT(ratio, 2.0);  // measured 2.64
-  EXPECT_EQ(scale, ratio);
+  EXPECT_EQ(depth["split_ratio_rms"].size(), 3u);
+  EXPECT_EQ(depth["split_ratio_rms"][0].get<double>(), ratio);
+  EXPECT_GT(pooled, 1.6);
+  EXPECT_EQ(scale, pooled);
   const auto a = nlohmann::json::parse(naneye::test::run_cli("calib info --json " + plain).out);
   const auto b = nlohmann::json::parse(naneye::test::run_cli("calib info --json " + checked).out);
   EXPECT_EQ(a["calibration_depth_sigma"]["scale"].get<double>(), 1.0);

@@ -29,8 +29,8 @@ struct CalibrationSigmas {
   std::optional<Eigen::Vector3d> T;
   std::optional<CalibrationCovariance> covariance;
   // >= 1: the factor the covariance's sigmas understate the calibration's errors by, measured when
-  // it was made (`naneye calibrate --cross-validate`: the odd and even halves' depths differ by
-  // more than their combined sigmas allow; docs/calibration.md). CalibrationUncertainty::of scales
+  // it was made (`naneye calibrate --cross-validate`: three halvings' depths differ by more than
+  // their combined sigmas allow; docs/calibration.md). CalibrationUncertainty::of scales
   // by it; the covariance itself stays the bundle's. 1 when not measured or not beyond chance.
   double covariance_scale = 1.0;
 };
