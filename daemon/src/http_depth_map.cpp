@@ -1,7 +1,7 @@
-// /v1/depth.png (the dense map as 16-bit PNG, Z in 0.01 mm on the left raw grid, 0 = no depth; or,
-// with ?layer=, its match or calibration sigmas in the same units) and /v1/depth/colour.png (the
-// depth colour-mapped, with a scale bar in mm below it). Both of the latest result's own map: a map
-// is never served for another pair than the one it was computed on.
+// /v1/depth.png (the dense map as 16-bit PNG, Z in 0.01 mm on the left raw grid, 0 = no depth) and
+// /v1/depth/colour.png (the same colour-mapped, with a scale bar in mm below it); with ?layer=, the
+// map's match or calibration sigmas instead of its depths. Both of the latest result's own map: a
+// map is never served for another pair than the one it was computed on.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -73,7 +73,7 @@ bool latest_map(HttpContext& ctx, httplib::Response& res, MapCopy& out,
   return true;
 }
 
-void send_png(httplib::Response& res, const cv::Mat& img, std::uint64_t pair, const char* name) {
+void send_png(httplib::Response& res, const cv::Mat& img, std::uint64_t pair, const std::string& name) {
   std::vector<std::uint8_t> png;
   if (!encode_png(img, png)) return send_error(res, 500, "encode_failed", "PNG encoding failed");
   res.set_header("X-Naneye-Pair", std::to_string(pair));
@@ -84,39 +84,55 @@ void send_png(httplib::Response& res, const cv::Mat& img, std::uint64_t pair, co
 
 std::string mm_label(double v) {
   char s[32];
-  std::snprintf(s, sizeof s, v < 10 ? "%.2f" : "%.1f", v);
+  std::snprintf(s, sizeof s, v < 1 ? "%.3f" : v < 10 ? "%.2f" : "%.1f", v);  // sigmas go to ~0.01 mm
   return s;
+}
+
+// ?layer= (depth when absent) and the latest map's values of it, or false with the error sent.
+bool requested_layer(HttpContext& ctx, const httplib::Request& req, httplib::Response& res, MapCopy& m,
+                     app::DepthLayer& layer) {
+  if (!only_params(req, res, {"layer"})) return false;
+  const std::string name = req.has_param("layer") ? req.get_param_value("layer") : "depth";
+  const auto parsed = app::depth_layer_from_string(name);
+  if (!parsed) {
+    send_error(res, 400, "bad_parameter", "layer must be depth, sigma or calib_sigma, got \"" + name + "\"");
+    return false;
+  }
+  layer = *parsed;
+  if (!latest_map(ctx, res, m, layer)) return false;
+  // A map with depths but no calibration sigma had a calibration without a covariance (a map
+  // without any depth has none to give either way: then the calibration in use decides).
+  if (layer == app::DepthLayer::calib_sigma && !m.calib_sigma &&
+      (m.valid_count > 0 || !ctx.pipeline->rig()->sigmas.covariance)) {
+    send_error(res, 422, "no_calibration_covariance",
+               "the calibration carries no covariance (the paper's files: marginal sigmas only), so there is "
+               "no calibration sigma to give; `naneye calibrate` writes one");
+    return false;
+  }
+  return true;
+}
+
+std::string file_name(app::DepthLayer layer) {
+  return layer == app::DepthLayer::depth ? "depth" : app::to_string(layer);
 }
 
 }  // namespace
 
 void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx) {
   svr.Get("/v1/depth.png", [&ctx](const httplib::Request& req, httplib::Response& res) {
-    if (!only_params(req, res, {"layer"})) return;
-    const std::string name = req.has_param("layer") ? req.get_param_value("layer") : "depth";
-    const auto layer = app::depth_layer_from_string(name);
-    if (!layer)
-      return send_error(res, 400, "bad_parameter",
-                        "layer must be depth, sigma or calib_sigma, got \"" + name + "\"");
     MapCopy m;
-    if (!latest_map(ctx, res, m, *layer)) return;
-    // A map with depths but no calibration sigma had a calibration without a covariance (a map
-    // without any depth has none to give either way: then the calibration in use decides).
-    if (*layer == app::DepthLayer::calib_sigma && !m.calib_sigma &&
-        (m.valid_count > 0 || !ctx.pipeline->rig()->sigmas.covariance))
-      return send_error(res, 422, "no_calibration_covariance",
-                        "the calibration carries no covariance (the paper's files: marginal sigmas only), so "
-                        "there is no calibration sigma to give; `naneye calibrate` writes one");
+    app::DepthLayer layer;
+    if (!requested_layer(ctx, req, res, m, layer)) return;
     cv::Mat img;
-    app::encode_depth_layer(m.z, m.width, m.height, *layer, img);
+    app::encode_depth_layer(m.z, m.width, m.height, layer, img);
     res.set_header("X-Naneye-Depth-Unit-Mm", "0.01");
-    send_png(res, img, m.pair, *layer == app::DepthLayer::depth ? "depth" : app::to_string(*layer));
+    send_png(res, img, m.pair, file_name(layer));
   });
 
   svr.Get("/v1/depth/colour.png", [&ctx](const httplib::Request& req, httplib::Response& res) {
-    if (!only_params(req, res, {})) return;
     MapCopy m;
-    if (!latest_map(ctx, res, m)) return;
+    app::DepthLayer layer;
+    if (!requested_layer(ctx, req, res, m, layer)) return;
     std::vector<float> valid;
     valid.reserve(m.z.size());
     for (float z : m.z)
@@ -158,12 +174,15 @@ void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx) {
       label("no depth", m.width / 2, 0);
     } else {
       label(mm_label(lo), x0, -1);
-      label(mm_label(0.5 * (lo + hi)) + " mm", m.width / 2, 0);
+      const char* what = layer == app::DepthLayer::depth   ? ""
+                         : layer == app::DepthLayer::sigma ? "sigma "
+                                                           : "calib sigma ";
+      label(what + mm_label(0.5 * (lo + hi)) + " mm", m.width / 2, 0);
       label(mm_label(hi), x1, 1);
     }
     res.set_header("X-Naneye-Scale-Min-Mm", mm_label(lo));
     res.set_header("X-Naneye-Scale-Max-Mm", mm_label(hi));
-    send_png(res, img, m.pair, "depth-colour");
+    send_png(res, img, m.pair, file_name(layer) + "-colour");
   });
 }
 

@@ -134,6 +134,21 @@ TEST_F(NaneyedTest, SceneModeServesTheSceneObjectPlyAndMetricsOfTheSamePair) {
   ASSERT_EQ(s16.type(), CV_16UC1);
   EXPECT_EQ(cv::countNonZero((s16 > 0) != (z16 > 0)), 0);
   EXPECT_EQ(get_json("/v1/depth.png?layer=calib_sigma", 422)["error"], "no_calibration_covariance");
+  EXPECT_EQ(get_json("/v1/depth/colour.png?layer=calib_sigma", 422)["error"], "no_calibration_covariance");
+  // The sigmas colour-mapped: black exactly where no depth is, the scale about their own values.
+  auto sigma_colour = client->Get("/v1/depth/colour.png?layer=sigma");
+  ASSERT_TRUE(sigma_colour);
+  ASSERT_EQ(sigma_colour->status, 200);
+  const cv::Mat sc8 = cv::imdecode(
+      std::vector<std::uint8_t>(sigma_colour->body.begin(), sigma_colour->body.end()), cv::IMREAD_COLOR);
+  ASSERT_EQ(sc8.rows, 286);
+  for (int v = 0; v < 250; v += 25)
+    for (int u = 0; u < 250; u += 25)
+      EXPECT_EQ(sc8.at<cv::Vec3b>(v, u) == cv::Vec3b(0, 0, 0), s16.at<std::uint16_t>(v, u) == 0)
+          << u << "," << v;
+  const double sigma_hi = std::stod(sigma_colour->get_header_value("X-Naneye-Scale-Max-Mm"));
+  EXPECT_GT(sigma_hi, std::stod(sigma_colour->get_header_value("X-Naneye-Scale-Min-Mm")));
+  EXPECT_LT(sigma_hi, 1.0);  // the sphere at 12-20 mm: sigmas of hundredths of a mm, not depths
   EXPECT_EQ(get_json("/v1/depth.png?layer=disparity", 400)["error"], "bad_parameter");
   int asked = 0, dense = 0;
   double dense_rel2 = 0;
@@ -237,6 +252,11 @@ TEST_F(NaneyedTest, SceneAnswersCarryTheCalibrationSigmaWhenTheFileHasACovarianc
   ASSERT_FALSE(units.empty());
   std::nth_element(units.begin(), units.begin() + static_cast<long>(units.size() / 2), units.end());
   EXPECT_NEAR(units[units.size() / 2] / 100.0, median.get<double>(), 0.0051);
+  const auto colour = client->Get("/v1/depth/colour.png?layer=calib_sigma");
+  ASSERT_TRUE(colour);
+  ASSERT_EQ(colour->status, 200);
+  EXPECT_LE(std::stod(colour->get_header_value("X-Naneye-Scale-Min-Mm")), median.get<double>() + 0.0005);
+  EXPECT_GE(std::stod(colour->get_header_value("X-Naneye-Scale-Max-Mm")), median.get<double>() - 0.0005);
   const auto metrics = client->Get("/metrics");
   ASSERT_TRUE(metrics);
   EXPECT_NEAR(metric_in_text(metrics->body, "naneye_scene_depth_calib_sigma_median_mm"), median.get<double>(),
