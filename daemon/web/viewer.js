@@ -221,16 +221,26 @@ async function refreshDepth() {
     view.depthPair = null;
     return;
   }
-  const res = await fetch("/v1/depth/colour.png", { cache: "no-store" });
+  // The calibration's sigma exists only when the calibration carries its covariance (null median
+  // otherwise): the choice is offered only then, and falls back to the depth when it goes away.
+  const select = $("depth-layer");
+  const calibOption = select.querySelector('option[value="calib_sigma"]');
+  calibOption.hidden = dense.calib_sigma_median_mm === null || dense.calib_sigma_median_mm === undefined;
+  if (calibOption.hidden && select.value === "calib_sigma") select.value = "depth";
+  const layer = select.value;
+  const res = await fetch(`/v1/depth/colour.png?layer=${layer}`, { cache: "no-store" });
   if (!res.ok) return;  // 503 while a newer map replaced this one: the next round fetches it
-  // The image is the map on the left raw grid with its scale bar (mm) below; the scale's ends are
-  // also given as headers (the 1st and 99th percentiles of this pair's depths).
+  // The image is the layer on the left raw grid with its scale bar (mm) below; the scale's ends are
+  // also given as headers (the 1st and 99th percentiles of this pair's values).
   const lo = res.headers.get("X-Naneye-Scale-Min-Mm"), hi = res.headers.get("X-Naneye-Scale-Max-Mm");
   view.depthPair = Number(res.headers.get("X-Naneye-Pair"));
   const share = (100 * dense.valid_share).toFixed(1);
   const median = dense.median_mm === null ? "-" : `${dense.median_mm.toFixed(2)} mm`;
-  $("depth-note").textContent = `Pair ${view.depthPair}: depth on the left raw pixel grid, scale ${lo}-${hi} mm; ` +
+  const what = { depth: "depth", sigma: "each depth's match sigma", calib_sigma: "each depth's calibration sigma" }[layer];
+  $("depth-note").textContent = `Pair ${view.depthPair}: ${what} on the left raw pixel grid, scale ${lo}-${hi} mm; ` +
     `black: no depth. Depth at ${share} % of the pixels both eyes see, median ${median}.`;
+  $("dl-depth").href = `/v1/depth.png?layer=${layer}`;
+  $("dl-depth").download = `${layer}.png`;
   img.hidden = false;
   const url = URL.createObjectURL(await res.blob());
   const old = img.src;
@@ -343,6 +353,7 @@ function updateBanner() {
 $("overlay").addEventListener("change", drawOverlays);
 $("fold").addEventListener("change", drawOverlays);
 $("colour-by").addEventListener("change", (e) => { cloud.colourBy = e.target.value; cloud.draw(); });
+$("depth-layer").addEventListener("change", () => { refreshDepth(); });
 $("reset-view").addEventListener("click", () => cloud.reset());
 setInterval(updateBanner, 500);
 

@@ -185,6 +185,18 @@ try {
   const depthShown = await until("depth image", () => scenePage.$eval("#img-depth", (e) => !e.hidden && e.complete && e.naturalWidth === 250 && e.naturalHeight === 286), 15000);
   const note = await scenePage.$eval("#depth-note", (e) => e.textContent);
   check("the depth panel shows the colour-mapped map with its scale in mm", depthShown && / scale [\d.]+-[\d.]+ mm/.test(note), note);
+  // The match sigmas instead: a scale of hundredths of a mm (the sphere at 12-20 mm), not depths; the
+  // calibration's sigma is not offered (the paper's calibration has no covariance).
+  const calibOffered = await scenePage.$eval('#depth-layer option[value="calib_sigma"]', (e) => !e.hidden);
+  await scenePage.select("#depth-layer", "sigma");
+  const sigmaNote = await until("sigma layer", async () => {
+    const t = await scenePage.$eval("#depth-note", (e) => e.textContent);
+    return /match sigma/.test(t) ? t : null;
+  }, 10000);
+  const sigmaHi = sigmaNote ? Number((/ scale [\d.]+-([\d.]+) mm/.exec(sigmaNote) || [])[1]) : NaN;
+  check("the depth panel shows the match sigmas on their own scale", sigmaNote !== null && sigmaHi > 0 && sigmaHi < 1 && !calibOffered,
+        `${sigmaNote}; calibration sigma offered: ${calibOffered}`);
+  await scenePage.select("#depth-layer", "depth");
   const sceneDrawn = await until("scene cloud", async () => { const n = await scenePage.evaluate(() => window.naneyeViewer.cloud.drawn); return n >= 300 ? n : null; }, 10000);
   check("the 3D view draws the scene points", sceneDrawn !== null, `${sceneDrawn} points`);
   // A pixel the dense map has a depth at (asked outside the page first, so the page's own request
