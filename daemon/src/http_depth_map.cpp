@@ -33,8 +33,8 @@ cv::Vec3b turbo(double t) {
 struct MapCopy {
   std::uint64_t pair = 0;
   int width = 0, height = 0;
-  std::vector<float> z;      // the layer asked for (depth unless told otherwise)
-  bool calib_sigma = false;  // the map carries calibration sigmas (its calibration had a covariance)
+  std::vector<float> values;  // mm, of the layer asked for (depth unless told otherwise)
+  bool calib_sigma = false;   // the map carries calibration sigmas (its calibration had a covariance)
   int valid_count = 0;
 };
 
@@ -52,7 +52,7 @@ bool latest_map(HttpContext& ctx, httplib::Response& res, MapCopy& out,
     out.width = d->map.width;
     out.height = d->map.height;
     const auto& v = app::layer_values(d->map, layer);
-    out.z.assign(v.begin(), v.end());
+    out.values.assign(v.begin(), v.end());
     out.calib_sigma = std::isfinite(d->map.calib_sigma_median_mm);
     out.valid_count = d->map.valid_count;
   });
@@ -66,7 +66,7 @@ bool latest_map(HttpContext& ctx, httplib::Response& res, MapCopy& out,
                      : "scene reconstruction is off ([recon] mode = \"board\"): there is no dense depth map");
     return false;
   }
-  if (!held || out.z.size() != static_cast<std::size_t>(out.width) * out.height || out.width <= 0) {
+  if (!held || out.values.size() != static_cast<std::size_t>(out.width) * out.height || out.width <= 0) {
     send_error(res, 503, "depth_map_gone", "the latest result's dense map was replaced; retry");
     return false;
   }
@@ -124,7 +124,7 @@ void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx) {
     app::DepthLayer layer;
     if (!requested_layer(ctx, req, res, m, layer)) return;
     cv::Mat img;
-    app::encode_depth_layer(m.z, m.width, m.height, layer, img);
+    app::encode_depth_layer(m.values, m.width, m.height, layer, img);
     res.set_header("X-Naneye-Depth-Unit-Mm", "0.01");
     send_png(res, img, m.pair, file_name(layer));
   });
@@ -134,9 +134,9 @@ void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx) {
     app::DepthLayer layer;
     if (!requested_layer(ctx, req, res, m, layer)) return;
     std::vector<float> valid;
-    valid.reserve(m.z.size());
-    for (float z : m.z)
-      if (std::isfinite(z)) valid.push_back(z);
+    valid.reserve(m.values.size());
+    for (float x : m.values)
+      if (std::isfinite(x)) valid.push_back(x);
     double lo = 0, hi = 1;
     if (!valid.empty()) {
       auto quantile = [&valid](double q) {
@@ -151,8 +151,8 @@ void add_depth_map_routes(httplib::Server& svr, HttpContext& ctx) {
     cv::Mat img(m.height + kBarHeight, m.width, CV_8UC3, cv::Scalar(0, 0, 0));
     for (int v = 0; v < m.height; ++v)
       for (int u = 0; u < m.width; ++u) {
-        const float z = m.z[static_cast<std::size_t>(v) * m.width + u];
-        if (std::isfinite(z)) img.at<cv::Vec3b>(v, u) = turbo((z - lo) / (hi - lo));
+        const float x = m.values[static_cast<std::size_t>(v) * m.width + u];
+        if (std::isfinite(x)) img.at<cv::Vec3b>(v, u) = turbo((x - lo) / (hi - lo));
       }
     // The bar: the scale's range left to right, labelled at both ends and in the middle (mm).
     const int x0 = 8, x1 = m.width - 8, y0 = m.height + 4, y1 = m.height + 14;

@@ -160,8 +160,9 @@ bool in_first_half(std::size_t i, int halving) {
   return halving == 0 ? (m == 0 || m == 1) : (m == 0 || m == 3);
 }
 
-void compare_depths(std::span<const CalibrationView> views, const BoardGeometry& board,
-                    const CalibrationSettings& settings, OddEvenValidation& out) {
+// The depth test of odd/even (out.odd, out.even) and of the two other halvings, pooled.
+void compare_halvings(std::span<const CalibrationView> views, const BoardGeometry& board,
+                      const CalibrationSettings& settings, OddEvenValidation& out) {
   const DepthComparison oe = compare_depths(views, out.odd.rig, out.even.rig);
   if (!oe.ok) return;
   out.depth_corners = static_cast<int>(oe.relative.size());
@@ -224,7 +225,7 @@ OddEvenValidation cross_validate_odd_even(std::span<const CalibrationView> views
     out.parameters.push_back(c);
   }
   out.ratio_rms = free ? std::sqrt(sum / free) : 0.0;
-  compare_depths(views, board, settings, out);
+  compare_halvings(views, board, settings, out);
   out.ok = true;
   return out;
 }
