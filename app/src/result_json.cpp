@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "naneye/app/json_number.hpp"
+
 namespace naneye::app {
 namespace {
 
@@ -44,8 +46,7 @@ nlohmann::json result_to_json(const recon::PairResult& r) {
     o["right_px"] = vec(p.right_px);
     o["xyz_mm"] = p.valid ? vec(p.xyz_mm) : nlohmann::json(nullptr);
     o["depth_sigma_mm"] = p.valid ? nlohmann::json(p.depth_sigma_mm) : nlohmann::json(nullptr);
-    o["calib_sigma_mm"] = p.valid && std::isfinite(p.calib_sigma_mm) ? nlohmann::json(p.calib_sigma_mm)
-                                                                     : nlohmann::json(nullptr);
+    o["calib_sigma_mm"] = p.valid ? finite_or_null(p.calib_sigma_mm) : nlohmann::json(nullptr);
     o["xyz_board_mm"] = p.valid ? vec(p.xyz_board_mm) : nlohmann::json(nullptr);
     o["valid"] = p.valid;
     pts.push_back(std::move(o));

@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "naneye/app/json_number.hpp"
+
 namespace naneye::app {
 
 DepthSummary summarize(const recon::scene::DepthMap& m) {
@@ -22,8 +24,7 @@ nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::opt
       q["right_px"] = {p.right_px.x(), p.right_px.y()};
       q["xyz_mm"] = {p.X.x(), p.X.y(), p.X.z()};
       q["depth_sigma_mm"] = p.depth_sigma_mm;
-      q["calib_sigma_mm"] =
-          std::isfinite(p.calib_sigma_mm) ? nlohmann::json(p.calib_sigma_mm) : nlohmann::json(nullptr);
+      q["calib_sigma_mm"] = finite_or_null(p.calib_sigma_mm);
     } else {
       q["right_px"] = nullptr;
       q["xyz_mm"] = nullptr;
@@ -38,11 +39,8 @@ nlohmann::json scene_to_json(const recon::scene::SparseResult& r, const std::opt
   j["noise_sigma_dn"] = r.noise_sigma_dn;
   if (depth) {
     j["depth"] = {{"valid_share", depth->valid_share},
-                  {"median_mm", std::isfinite(depth->median_mm) ? nlohmann::json(depth->median_mm)
-                                                                : nlohmann::json(nullptr)},
-                  {"calib_sigma_median_mm", std::isfinite(depth->calib_sigma_median_mm)
-                                                ? nlohmann::json(depth->calib_sigma_median_mm)
-                                                : nlohmann::json(nullptr)},
+                  {"median_mm", finite_or_null(depth->median_mm)},
+                  {"calib_sigma_median_mm", finite_or_null(depth->calib_sigma_median_mm)},
                   {"valid_pixels", depth->valid_count},
                   {"visible_pixels", depth->visible_count}};
   } else {

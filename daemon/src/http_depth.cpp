@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "http_internal.hpp"
+#include "naneye/app/json_number.hpp"
 #include "naneye/app/result_json.hpp"
 #include "naneye/base/clock.hpp"
 #include "naneye/daemon/depth_at.hpp"
@@ -150,8 +151,7 @@ void add_depth_routes(httplib::Server& svr, HttpContext& ctx) {
                        {"col", pt.col},
                        {"xyz_mm", {pt.xyz_mm.x(), pt.xyz_mm.y(), pt.xyz_mm.z()}},
                        {"depth_sigma_mm", pt.depth_sigma_mm},
-                       {"calib_sigma_mm", std::isfinite(pt.calib_sigma_mm) ? nlohmann::json(pt.calib_sigma_mm)
-                                                                           : nlohmann::json(nullptr)},
+                       {"calib_sigma_mm", app::finite_or_null(pt.calib_sigma_mm)},
                        {"xyz_board_mm", {pt.xyz_board_mm.x(), pt.xyz_board_mm.y(), pt.xyz_board_mm.z()}}});
       }
       body["points"] = std::move(pts);

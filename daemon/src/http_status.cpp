@@ -4,6 +4,7 @@
 
 #include "http_access.hpp"
 #include "http_internal.hpp"
+#include "naneye/app/json_number.hpp"
 
 namespace naneye::daemon::http {
 namespace {
@@ -22,12 +23,9 @@ nlohmann::json scene_json(const PipelineStatus& s) {
   if (!s.scene) return nullptr;
   nlohmann::json depth = nullptr;
   if (const auto& d = s.scene->depth)
-    depth = {
-        {"valid_share", d->valid_share},
-        {"median_mm", std::isfinite(d->median_mm) ? nlohmann::json(d->median_mm) : nlohmann::json(nullptr)},
-        {"calib_sigma_median_mm", std::isfinite(d->calib_sigma_median_mm)
-                                      ? nlohmann::json(d->calib_sigma_median_mm)
-                                      : nlohmann::json(nullptr)}};
+    depth = {{"valid_share", d->valid_share},
+             {"median_mm", app::finite_or_null(d->median_mm)},
+             {"calib_sigma_median_mm", app::finite_or_null(d->calib_sigma_median_mm)}};
   return {{"features", s.scene->features},
           {"valid_points", s.scene->valid_points},
           {"noise_sigma_dn", s.scene->noise_sigma_dn},
