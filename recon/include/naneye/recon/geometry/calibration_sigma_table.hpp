@@ -1,14 +1,14 @@
 #pragma once
 // The calibration's depth sigma (calibration_uncertainty.hpp) for every pixel of a dense map: the
-// exact propagation costs 0.31 us a point (bench_recon BM_CalibrationDepthSigma), ~19 ms for a
-// 250 x 250 map, more than the dense path itself. A dense map's pixels are the left raw grid's, so
-// the table holds, per pixel, the sigma along its ray as a function of depth, once per rig:
+// exact propagation costs 0.27 us a point (bench_recon BM_CalibrationDepthSigma), ~13 ms for the
+// ~47 000 depths of a map, most of the dense path's own time. A dense map's pixels are the left raw grid's,
+// so the table holds, per pixel, the sigma along its ray as a function of depth, once per rig:
 // - per pixel, sigma_Z / Z^2 as a Chebyshev interpolant in inverse depth w = 1/Z over
 //   [1/z_max, 1/z_min] (the dense band's range), from its values at depth_terms Chebyshev nodes
 //   (Trefethen, Approximation Theory and Approximation Practice, ch. 3-4);
 // - sigma_Z / Z^2 because a disparity-like error gives it exactly (Z = f B / d, dZ = Z^2 / (f B)
 //   dd) and the rest (focal, baseline, the right pixel's drift along the epipolar curve) is
-//   analytic in w with terms of order |T| w (<= 0.2 at 5 mm): 8 terms leave < 3e-4 of the sigma
+//   analytic in w with terms of order |T| w (<= 0.2 at 5 mm): 8 terms leave < 2e-4 of the sigma
 //   (CalibrationSigmaTable.*, over every pixel both eyes see at depths across the band);
 // - a spatial grid does not serve: toward the fold the sigma grows without bound (the projection's
 //   radial derivative vanishes there) and even at 50-90 px from the centre it changes by 1 % within
@@ -26,9 +26,9 @@ namespace naneye::recon {
 
 struct CalibrationSigmaTableSettings {
   double z_min_mm = 5, z_max_mm = 150;  // mm; the depths tabulated (the dense path's band)
-  // Chebyshev terms per pixel: 8 leave < 3e-4 of the sigma, 6 ~3e-3, 4 ~2e-2 (the test's
+  // Chebyshev terms per pixel: 8 leave < 2e-4 of the sigma, 6 ~2e-3, 4 ~1e-2 (the test's
   // measurement, docs/scene.md); each term costs a float per pixel and an exact propagation per
-  // pixel at construction (8: 2 MB, ~0.2 s for 250 x 250).
+  // pixel at construction (8: 2 MB, 124 ms for 250 x 250, bench_recon BM_CalibrationSigmaTable).
   int depth_terms = 8;
   // Throws std::invalid_argument when a setting cannot give a table.
   void validate() const;
