@@ -3,12 +3,21 @@
 // every noisy render: the spread of Z over the seeds (the noise's part of the error) against the
 // stated sigma, the noise-free render's error (the method's misfit: resampling, the window model)
 // against the same sigma, and the plain rms(err / sigma) the tests hold to 0.7-1.4.
-//   build/bench/bench_dense_sigma [--seeds K] [--real-sensor] [--no-fpn] [--max-radius R]
+//   build/bench/bench_dense_sigma [--seeds K] [--real-sensor] [--no-fpn] [--max-radius R] [--max-sigma S]
+//                                 [--pattern dsnu|prnu|as-read-noise]
 // --real-sensor: the real NanEye's measured noise, blur and fixed patterns (SensorSettings::measured),
 // where the matcher widens its window (the r column: the radius the last noisy render was matched with).
 // --no-fpn: without the fixed pattern (column FPN, DSNU, PRNU), to tell its share of the misfit.
 // --max-radius R: the largest window the matcher may choose (R = 3: the fixed window).
+// --max-sigma S: the matcher's sigma bound, px (MatcherSettings::max_sigma_px).
+// --pattern dsnu | prnu | as-read-noise: with --real-sensor, only the DSNU or only the PRNU of the
+// fixed pattern, or none of it but the DSNU's variance added to the read noise (temporal): does a
+// fixed pattern hurt the sigma more than temporal noise of the same variance?
 // An honest sigma gives rms(spread / sigma) ~ 1; the misfit is not noise and is not in the sigma.
+// p68, tail and core/s tell a sigma too small for every pixel from one right for most but with a few
+// gross errors: the 68.27 % quantile of |err / sigma| (1 for a Gaussian), the share beyond 4 sigma,
+// and the rms of the rest.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -25,6 +34,9 @@ using namespace naneye;
 
 namespace {
 
+// |err| / sigma beyond which an error counts as the tail: a Gaussian passes 4 sigma once in ~16 000.
+constexpr float kTail = 4.f;
+
 struct Case {
   const char* label;
   const char* preset;
@@ -34,9 +46,15 @@ struct Case {
 };
 
 void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor, bool no_fpn,
-         const recon::scene::DenseSettings& ds) {
+         const std::string& pattern, const recon::scene::DenseSettings& ds) {
   sim::SensorSettings sensor = real_sensor ? sim::SensorSettings::measured(c.bayer) : sim::SensorSettings{};
   if (no_fpn) sensor.column_fpn_dn = sensor.dsnu_dn = sensor.prnu = 0;
+  if (pattern == "dsnu") sensor.prnu = sensor.column_fpn_dn = 0;
+  if (pattern == "prnu") sensor.dsnu_dn = sensor.column_fpn_dn = 0;
+  if (pattern == "as-read-noise") {  // the DSNU's variance as temporal noise instead: fixed or not?
+    sensor.read_noise_dn = std::hypot(sensor.read_noise_dn, sensor.dsnu_dn);
+    sensor.dsnu_dn = sensor.prnu = sensor.column_fpn_dn = 0;
+  }
   sensor.bayer = c.bayer;
   sensor.white_dn = c.white_dn;
   sim::TexturedSceneSettings scene = *sim::textured_preset(c.preset);
@@ -46,6 +64,7 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
   recon::scene::SparseReconstructor luma(rig);
   recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap map;
+  std::vector<float> ratio;  // |err| / sigma per pixel and seed: the error's distribution, not only its rms
   double misfit2 = 0;
   int misfit_n = 0, radius = 0;
   for (int k = 0; k <= seeds; ++k) {
@@ -61,6 +80,7 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
       const std::size_t n = static_cast<std::size_t>(map.width) * map.height;
       for (auto* v : {&s1, &s2, &sig2, &e2}) v->assign(n, 0.0);
       count.assign(n, 0);
+      ratio.assign(n * static_cast<std::size_t>(seeds), 0.f);
     }
     for (int r = 0; r < map.height; ++r)
       for (int col = 0; col < map.width; ++col) {
@@ -78,6 +98,8 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
           s2[i] += z * z;
           sig2[i] += sg * sg;
           e2[i] += (z - zt) * (z - zt) / (sg * sg);
+          ratio[i * static_cast<std::size_t>(seeds) + static_cast<std::size_t>(k)] =
+              static_cast<float>(std::abs(z - zt) / sg);
           ++count[i];
         } else if (ok && count[i] == seeds) {
           misfit2 += (z - zt) * (z - zt) / (sig2[i] / seeds);
@@ -85,18 +107,39 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
         }
       }
   }
-  double spread = 0, err = 0;
-  int m = 0;
+  double spread = 0, err = 0, core2 = 0;
+  int m = 0, tail = 0, core = 0;
+  std::vector<float> valid_ratio;
   for (std::size_t i = 0; i < count.size(); ++i) {
     if (count[i] != seeds) continue;
+    for (int k = 0; k < seeds; ++k) {
+      const float q = ratio[i * static_cast<std::size_t>(seeds) + static_cast<std::size_t>(k)];
+      valid_ratio.push_back(q);
+      if (q > kTail) {
+        ++tail;
+      } else {
+        core2 += static_cast<double>(q) * q;
+        ++core;
+      }
+    }
     const double mean = s1[i] / seeds;
     spread += (s2[i] - seeds * mean * mean) / (seeds - 1) / (sig2[i] / seeds);
     err += e2[i] / seeds;
     ++m;
   }
-  std::printf("%-18s %-5s %2d %7d %8.3f %9.3f %8.3f\n", c.label, c.bayer ? "bayer" : "mono", radius, m,
-              std::sqrt(spread / std::max(1, m)), std::sqrt(misfit2 / std::max(1, misfit_n)),
-              std::sqrt(err / std::max(1, m)));
+  // The 68.27 % quantile of |err / sigma|: 1 for a Gaussian error of that sigma, and unmoved by a
+  // few gross errors, which the rms is not.
+  double p68 = 0;
+  if (!valid_ratio.empty()) {
+    auto mid = valid_ratio.begin() + static_cast<std::ptrdiff_t>(0.6827 * (valid_ratio.size() - 1));
+    std::nth_element(valid_ratio.begin(), mid, valid_ratio.end());
+    p68 = *mid;
+  }
+  const double all = std::max<std::size_t>(1, valid_ratio.size());
+  std::printf("%-18s %-5s %2d %7d %8.3f %9.3f %8.3f %6.3f %7.3f%% %8.3f\n", c.label,
+              c.bayer ? "bayer" : "mono", radius, m, std::sqrt(spread / std::max(1, m)),
+              std::sqrt(misfit2 / std::max(1, misfit_n)), std::sqrt(err / std::max(1, m)), p68,
+              100.0 * tail / all, std::sqrt(core2 / std::max(1, core)));
 }
 
 }  // namespace
@@ -104,6 +147,7 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
 int main(int argc, char** argv) {
   int seeds = 8;
   bool real_sensor = false, no_fpn = false;
+  std::string pattern = "all";
   recon::scene::DenseSettings ds;
   for (int a = 1; a < argc; ++a) {
     if (a + 1 < argc && std::strcmp(argv[a], "--seeds") == 0) seeds = std::max(2, std::atoi(argv[a + 1]));
@@ -111,11 +155,15 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[a], "--no-fpn") == 0) no_fpn = true;
     if (a + 1 < argc && std::strcmp(argv[a], "--max-radius") == 0)
       ds.matcher.max_radius = std::atoi(argv[a + 1]);
+    if (a + 1 < argc && std::strcmp(argv[a], "--max-sigma") == 0)
+      ds.matcher.max_sigma_px = std::atof(argv[a + 1]);
+    if (a + 1 < argc && std::strcmp(argv[a], "--pattern") == 0) pattern = argv[a + 1];
   }
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
   std::printf("%d noise seeds per case; figures over the pixels valid in every noisy render\n", seeds);
-  std::printf("%-18s %-5s %2s %7s %8s %9s %8s\n", "case", "", "r", "pixels", "spread/s", "misfit/s", "err/s");
+  std::printf("%-18s %-5s %2s %7s %8s %9s %8s %6s %8s %8s\n", "case", "", "r", "pixels", "spread/s",
+              "misfit/s", "err/s", "p68", "tail", "core/s");
   const Case cases[] = {
       {"plane", "plane", false, 760, 1},
       {"sphere", "sphere", false, 760, 1},
@@ -125,6 +173,6 @@ int main(int argc, char** argv) {
       {"plane", "plane", true, 760, 1},
       {"sphere", "sphere", true, 760, 1},
   };
-  for (const Case& c : cases) run(rig, c, seeds, real_sensor, no_fpn, ds);
+  for (const Case& c : cases) run(rig, c, seeds, real_sensor, no_fpn, pattern, ds);
   return 0;
 }
