@@ -6,6 +6,7 @@
 #include "naneye/recon/scene/bspline.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <opencv2/core.hpp>
 #include <stdexcept>
@@ -105,6 +106,13 @@ void bspline_coefficients(const GrayView& in, const ActiveRect& a, float* out, f
     const int from = a.row_begin + mirror(r - a.row_begin, rows);
     std::copy_n(out + static_cast<std::ptrdiff_t>(from) * w, w, out + static_cast<std::ptrdiff_t>(r) * w);
   }
+}
+
+double bspline_knot_derivative_tap(int k) {
+  if (k == 0 || std::abs(k) > kKnotDerivativeReach) return 0.0;
+  const double z = std::sqrt(3.0) - 2.0;
+  const auto h = [z](int j) { return std::sqrt(3.0) * std::pow(z, std::abs(j)); };
+  return 0.5 * (h(k - 1) - h(k + 1));
 }
 
 }  // namespace naneye::recon::scene

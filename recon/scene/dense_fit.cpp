@@ -52,8 +52,9 @@ inline void fit_one(const FitRow& r, int x) {
   r.swg[x] = static_cast<float>(Swg);
   r.sgg[x] = static_cast<float>(Sgg);
   if (!(a > 0)) return;  // anti-correlated: validate() refuses it
-  // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it.
-  r.step[x] = static_cast<float>(std::clamp(c / a, -0.5, 0.5));
+  // A Gauss-Newton step beyond half a pixel leaves the linearisation's range: clamp it. (G is the
+  // left's gradient, a times the right's: c is the step itself, dense_subpixel.cpp.)
+  r.step[x] = static_cast<float>(std::clamp(c, -0.5, 0.5));
   r.solved[x] = 1;
 }
 
@@ -125,8 +126,7 @@ NANEYE_AVX2_INLINE void fit4(const FitRow& r, int x) {
   keep(r.swg, Swg, x, bad);
   keep(r.sgg, Sgg, x, bad);
   const VI ok = ~bad & lanes(a > 0.0);
-  VD q = c / a;
-  q = q < -0.5 ? VD{} - 0.5 : 0.5 < q ? VD{} + 0.5 : q;
+  const VD q = c < -0.5 ? VD{} - 0.5 : 0.5 < c ? VD{} + 0.5 : c;
   st(r.step + x, ok ? narrow(q) : zero);
   st(r.solved + x, ok ? zero + 1.f : zero);
 }
@@ -185,7 +185,7 @@ inline void update_one(const UpdateRow& r, int x) {
     return;
   }
   const float move = r.q_win[x] - r.q[x];
-  const float noise = 3.f * std::sqrt(r.s2[x] * r.z[x]) / r.a[x];
+  const float noise = 3.f * std::sqrt(r.s2[x] * r.z[x]);
   const bool smooth = std::abs(r.q[x]) <= noise && std::abs(move) <= noise;
   r.d[x] += r.step[x] + (smooth ? move : 0.f);
 }
@@ -199,10 +199,9 @@ __attribute__((target("avx2"))) void update_row_avx2(const UpdateRow& row) {
   int x = r.lo;
   for (; x + 8 <= r.hi; x += 8) {
     const __m256 q = _mm256_loadu_ps(r.q + x), move = _mm256_sub_ps(_mm256_loadu_ps(r.q_win + x), q);
-    const __m256 noise = _mm256_div_ps(
+    const __m256 noise =
         _mm256_mul_ps(_mm256_set1_ps(3.f),
-                      _mm256_sqrt_ps(_mm256_mul_ps(_mm256_loadu_ps(r.s2 + x), _mm256_loadu_ps(r.z + x)))),
-        _mm256_loadu_ps(r.a + x));
+                      _mm256_sqrt_ps(_mm256_mul_ps(_mm256_loadu_ps(r.s2 + x), _mm256_loadu_ps(r.z + x))));
     const __m256 smooth = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sign, q), noise, _CMP_LE_OQ),
                                         _mm256_cmp_ps(_mm256_andnot_ps(sign, move), noise, _CMP_LE_OQ));
     const __m256 d = _mm256_add_ps(_mm256_loadu_ps(r.d + x),

@@ -75,6 +75,10 @@ RectifiedMatcher::RectifiedMatcher(int width, int height, const MatcherSettings&
   bin_.assign(n, 0);
   taps_ok_.assign(n, 0);
   right_spline_.assign(n, 0.f);
+  left_grad_.assign(n, 0.f);
+  static_assert(std::tuple_size_v<decltype(knot_d_)> == 2 * kKnotDerivativeReach + 1);
+  for (int k = -kKnotDerivativeReach; k <= kKnotDerivativeReach; ++k)
+    knot_d_[static_cast<std::size_t>(k + kKnotDerivativeReach)] = bspline_knot_derivative_tap(k);
 }
 
 RectifiedMatcher::~RectifiedMatcher() = default;
@@ -84,6 +88,7 @@ void RectifiedMatcher::match(const cv::Mat& left, const cv::Mat& right, const cv
   CV_Assert(left.type() == CV_32FC1 && right.type() == CV_32FC1 && left.cols == w_ && left.rows == h_);
   update_spans(valid_left);
   prepare_right(right, valid_right);
+  left_gradient(left, valid_left);
   integer_stage(left, right);
   match_at(r_, left, valid_left);
   if (s_.max_radius > s_.radius) choose_radius(left, valid_left);
@@ -146,6 +151,35 @@ void RectifiedMatcher::swap_result(Result& r) {
   std::swap(residual_sigma_, r.residual_sigma);
   std::swap(kappa_, r.kappa);
   std::swap(marginal_, r.marginal);
+}
+
+// The fit's gradient regressor (dense_subpixel.cpp): the derivative of the left row's cubic B-spline
+// interpolant at its pixels, (c[x + 1] - c[x - 1]) / 2 of its coefficients (bspline.hpp), every run
+// of valid pixels on its own. Exact for a band-limited texture where the central difference of the
+// pixels loses a third of the slope at 4 px wavelengths (and 4 Gauss-Newton steps then no longer
+// converge on a sharp texture: measured, bench_dense_snr). NaN where the pixel or a neighbour has no
+// data: such a pixel has no gradient to stand behind and stays out of every window (gather).
+void RectifiedMatcher::left_gradient(const cv::Mat& left, const cv::Mat& valid_left) {
+  float* c = line_.data();
+  for (int y = 0; y < h_; ++y) {
+    const float* l = left.ptr<float>(y);
+    const std::uint8_t* v = valid_left.ptr<std::uint8_t>(y);
+    float* g = left_grad_.data() + static_cast<std::size_t>(y) * w_;
+    std::fill(g, g + w_, kNoMatch);
+    for (int x = 0; x < w_;) {
+      if (!v[x]) {
+        ++x;
+        continue;
+      }
+      int end = x;
+      while (end < w_ && v[end]) ++end;
+      if (end - x >= 3) {
+        bspline_coefficients_line(l + x, end - x, c);
+        for (int k = 1; k + 1 < end - x; ++k) g[x + k] = 0.5f * (c[k + 1] - c[k - 1]);
+      }
+      x = end;
+    }
+  }
 }
 
 // The sub-pixel step's target (gather): every run of valid right pixels on its own, so that nothing
@@ -350,7 +384,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
         ++c.shift;
         continue;
       }
-      const double zc = eiv_zc(i);
+      const double zc = eiv_zc(i);  // G is the left's gradient: c is the step itself, no 1 / a
       // The window's residual variance is a 49-121 pixel estimate (~20-30 % spread): one low by
       // chance would claim less noise than the pair has for such a window. Never below the median of
       // its kind; its own excess where it has one (the chi-square test below bounds that).
@@ -358,7 +392,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       // (No median at all, when no window had a residual: the window's own.)
       const double kind = expected_residual(i);
       const double s2 = std::isfinite(kind) ? std::max(static_cast<double>(s2_[i]), kind) : s2_[i];
-      const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2 * zc) / a_[i];
+      const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2 * zc);
       if (!(sigma <= s_.max_sigma_px)) {
         ++c.texture;
         continue;
@@ -407,13 +441,22 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
 }
 
 // (A^-1)_cc of the last fit, with the regressors' own noise taken out (errors in variables; Fuller,
-// "Measurement Error Models", 1987, Sec. 1.1): W and G are the noisy right image and its gradient,
-// so the centred sums A = [Sww -Swg; -Swg Sgg] hold N times their noise variances, and the fit's
-// sensitivity is As = A - N diag(vw, vg). The estimate's variance per unit residual variance is then
-// the sandwich (As^-1 A As^-1)_cc, not (A^-1)_cc: larger where the texture is faint against the
-// noise (a blurred image), nearly the same on a sharp one. The right image's noise variance v comes
-// from the residual's, s^2 = v (1 + a^2) (the eyes alike); vw = v, vg = grad_noise_ratio_ v. A window whose
-// gradient is mostly noise (As not positive) gives infinity: no sigma to stand behind.
+// "Measurement Error Models", 1987, Sec. 1.1): W is the noisy right image, G the noisy left's
+// gradient, so the centred sums A = [Sww -Swg; -Swg Sgg] hold N times their noise variances, and
+// the fit's sensitivity is As = A - N diag(vw, vg). The estimate's variance per unit residual
+// variance is the sandwich (As^-1 M As^-1)_cc: larger than (A^-1)_cc where the texture is faint
+// against the noise (a blurred image), nearly the same on a sharp one. M is A but for one term: G's
+// noise is the left pixels' noise filtered by D (bspline_knot_derivative_tap), and the residual
+// holds the same left noise at the neighbouring pixels, so sum G r carries the products of the two,
+// whose expectation over a window is -N vl^2 sum_m e(m) e(-m) (e = D * rho; for white noise
+// -N vl^2 sum D_k^2: D is odd); per unit residual variance, M_gg = Sgg - N grad_cross_ratio_ vl^2 / s^2.
+// (Its expectation at the same pixel, sum_k D_k rho(k), is 0: D odd, rho even, so G's noise biases
+// no step. The right image's gradient, used until 2026-12-06, shares the interpolated right noise
+// with W at every pixel, and that bias moved each match by up to 0.7 sigma at low signal to noise,
+// varying with the disparity's fraction: docs/scene.md, "The gradient from the left".) The left
+// image's noise variance vl comes from the residual's, s^2 = vl (1 + a^2) (the eyes alike); vw = vl,
+// vg = grad_noise_ratio_ vl. A window whose gradient is mostly noise (As not positive) gives infinity:
+// no sigma to stand behind.
 double RectifiedMatcher::eiv_zc(std::size_t i) const {
   const double N = n_[i], a = a_[i];
   const double v = s2_[i] / (1.0 + a * a);
@@ -423,7 +466,9 @@ double RectifiedMatcher::eiv_zc(std::size_t i) const {
   if (!(ps > 0 && rs > 0 && dets > 0)) return std::numeric_limits<double>::infinity();
   // As^-1 = [rs q; q ps] / dets (As = [ps -q; -q rs]); its c row: (q, ps) / dets.
   const double u = q / dets, w = ps / dets;
-  return u * u * p - 2 * u * w * q + w * w * r;
+  const double r_mid = r - N * grad_cross_ratio_ * v / (1.0 + a * a);
+  const double zc = u * u * p - 2 * u * w * q + w * w * r_mid;
+  return zc > 0 ? zc : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace naneye::recon::scene

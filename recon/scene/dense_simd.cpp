@@ -186,21 +186,22 @@ NANEYE_SIMD_INLINE void lag_products_v(const float* e, int w, int h, double* acc
 // A block's taps and left pixels, less mu, its offsets t from tap 0 and its mask (all zero where
 // the pixel has no four valid taps or lies beyond `count`): per lane, in scalar code.
 struct Taps {
-  alignas(32) float T[8], R[4][8], Lv[8], M[8];
+  alignas(32) float T[8], R[4][8], Lv[8], Gl[8], M[8];
 };
 template <int L>
 NANEYE_SIMD_INLINE void pick_lanes(const GatherRow& g, int x, int count, Taps& p) {
   for (int j = 0; j < L; ++j) {
-    p.T[j] = p.R[0][j] = p.R[1][j] = p.R[2][j] = p.R[3][j] = p.Lv[j] = p.M[j] = 0.f;
+    p.T[j] = p.R[0][j] = p.R[1][j] = p.R[2][j] = p.R[3][j] = p.Lv[j] = p.Gl[j] = p.M[j] = 0.f;
     if (j >= count) continue;
     const float d = g.d[x + j];
     if (!std::isfinite(d)) continue;
     const float xs = static_cast<float>(x + j) - d;
     const int i0 = static_cast<int>(std::floor(xs));
-    if (i0 < 1 || i0 + 2 >= g.w || !g.taps_ok[i0]) continue;
+    if (i0 < 1 || i0 + 2 >= g.w || !g.taps_ok[i0] || !std::isfinite(g.left_grad[x + j])) continue;
     p.T[j] = xs - static_cast<float>(i0);
     for (int k = 0; k < 4; ++k) p.R[k][j] = g.right[i0 - 1 + k] - g.mu;
     p.Lv[j] = g.left[x + j] - g.mu;
+    p.Gl[j] = g.left_grad[x + j];
     p.M[j] = 1.f;
   }
 }
@@ -229,8 +230,13 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRo
   const __m256i word =
       _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(g.taps_ok),
                                   _mm256_sub_epi32(at, _mm256_set1_epi32(1)), ok, 1);
-  const __m256 mask = _mm256_castsi256_ps(_mm256_andnot_si256(
-      _mm256_cmpeq_epi32(_mm256_and_si256(word, _mm256_set1_epi32(0xff00)), _mm256_setzero_si256()), ok));
+  const __m256 grad = _mm256_loadu_ps(g.left_grad + x);
+  const __m256 has_grad = _mm256_cmp_ps(_mm256_sub_ps(grad, grad), _mm256_setzero_ps(), _CMP_EQ_OQ);
+  const __m256 mask = _mm256_and_ps(
+      has_grad,
+      _mm256_castsi256_ps(_mm256_andnot_si256(
+          _mm256_cmpeq_epi32(_mm256_and_si256(word, _mm256_set1_epi32(0xff00)), _mm256_setzero_si256()),
+          ok)));
   const float* r = g.right - 1;
   __m256 a[4];
   for (int k = 0; k < 4; ++k)
@@ -244,6 +250,7 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRo
   _mm256_store_ps(p.T, _mm256_and_ps(mask, _mm256_sub_ps(xs, _mm256_cvtepi32_ps(i0))));
   for (int k = 0; k < 4; ++k) _mm256_store_ps(p.R[k], _mm256_and_ps(mask, _mm256_sub_ps(tap[k], mu)));
   _mm256_store_ps(p.Lv, _mm256_and_ps(mask, _mm256_sub_ps(_mm256_loadu_ps(g.left + x), mu)));
+  _mm256_store_ps(p.Gl, _mm256_and_ps(mask, grad));
   _mm256_store_ps(p.M, _mm256_and_ps(mask, _mm256_set1_ps(1.f)));
 }
 
@@ -252,25 +259,19 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE void pick_avx2(const GatherRo
 template <class V>
 NANEYE_SIMD_INLINE void gather_block(const GatherRow& g, const Taps& p, int x, int count) {
   constexpr int L = kLanes<V>;
-  // The cubic B-spline (the row holds its coefficients: bspline.hpp) and its derivative at offset t
-  // in [0, 1) from tap 0, for taps -1, 0, 1, 2.
+  // The cubic B-spline (the row holds its coefficients: bspline.hpp) at offset t in [0, 1) from
+  // tap 0, for taps -1, 0, 1, 2.
   const V t = load<V>(p.T), t2 = t * t, t3 = t2 * t;
   const V s = 1.f - t;
   const V w0 = (1.f / 6.f) * (s * s * s), w1 = 0.5f * t3 - t2 + 2.f / 3.f;
   const V w2 = -0.5f * t3 + 0.5f * t2 + 0.5f * t + 1.f / 6.f, w3 = (1.f / 6.f) * t3;
-  const V dw0 = -0.5f * (s * s), dw1 = 1.5f * t2 - 2.f * t;
-  const V dw2 = -1.5f * t2 + t + 0.5f, dw3 = 0.5f * t2;
   const V r0 = load<V>(p.R[0]), r1 = load<V>(p.R[1]), r2 = load<V>(p.R[2]), r3 = load<V>(p.R[3]);
-  V W = V{}, G = V{};
+  V W = V{};
   W += w0 * r0;
   W += w1 * r1;
   W += w2 * r2;
   W += w3 * r3;
-  G += dw0 * r0;
-  G += dw1 * r1;
-  G += dw2 * r2;
-  G += dw3 * r3;
-  const V m = load<V>(p.M), l = load<V>(p.Lv);
+  const V m = load<V>(p.M), l = load<V>(p.Lv), G = load<V>(p.Gl);
   const V out[10] = {m,         m * W,     m * l,     m * G,     m * W * W,
                      m * G * G, m * W * G, m * W * l, m * G * l, m * l * l};
   for (int c = 0; c < 10; ++c)

@@ -37,12 +37,13 @@ void filter_lags(bool avx2, const float* z, float* out, const float* rho, int la
 void lag_products(bool avx2, const float* e, int w, int h, double acc[49]);
 
 // One rectified row of the sub-pixel step's per-pixel products (RectifiedMatcher::gather): the cubic
-// B-spline over the right row's coefficients at x - d (W) and its derivative (G), the left pixel (l),
-// all less mu, and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1 where every tap lies inside the
-// right's valid domain, else all zero).
+// B-spline over the right row's coefficients at x - d (W) and the left pixel (l), both less mu, the
+// left's gradient (G, from left_grad), and the ten channels m, W, l, G, WW, GG, WG, Wl, Gl, ll (m = 1
+// where every tap lies inside the right's valid domain and the left has a gradient, else all zero).
 struct GatherRow {
-  const float* left;   // left row
-  const float* right;  // right row's B-spline coefficients (bspline_coefficients_line per valid run)
+  const float* left;       // left row
+  const float* left_grad;  // the left row's gradient (RectifiedMatcher::left_gradient; NaN: none)
+  const float* right;      // right row's B-spline coefficients (bspline_coefficients_line per valid run)
   // taps_ok[i]: right pixels i - 1 .. i + 2 all valid (only read for 1 <= i < w - 2)
   const std::uint8_t* taps_ok;
   const float* d;  // the row's reference disparities (NaN: none)
@@ -54,7 +55,7 @@ void gather_row(bool avx2, const GatherRow& g);
 
 // One row of an earlier Gauss-Newton iteration's step (RectifiedMatcher::refine; dense_step.cpp), in
 // float, over columns [lo, hi): from the window sums N, W, L, G, WW, GG, WG, WL, GL (s[0..8] at this row) the
-// centred 2 x 2 system, its step nc / na clamped to half a pixel. Per pixel: no disparity (d NaN),
+// centred 2 x 2 system, its step nc / det clamped to half a pixel. Per pixel: no disparity (d NaN),
 // no data (m == 0) or fewer than 4 window pixels, or det <= 0: d = NaN, out = solved = 0; na <= 0
 // (anti-correlated): out = solved = 0; else out = d + step, solved = 1.
 struct StepRow {
@@ -70,7 +71,7 @@ void step_row(bool avx2, const StepRow& r);
 // One row of the last Gauss-Newton iteration's fit (RectifiedMatcher::refine), in double, over
 // columns [lo, hi) (dense_fit.cpp). From the window sums s[0..9] (N, W, L, G, WW, GG, WG, WL, GL, LL)
 // at this row: n = N, step = solved = 0; no disparity, no data, N < 4 or det <= 0: d = NaN and nothing
-// else written; else the fit's a, b, c, s2, z and centred sums, and where a > 0 the step c / a clamped
+// else written; else the fit's a, b, c, s2, z and centred sums, and where a > 0 the step c clamped
 // to half a pixel, solved = 1. The AVX2 build computes 4 pixels at once in the scalar loop's order.
 struct FitRow {
   const float* s[10];
@@ -94,9 +95,9 @@ void detail_row(bool avx2, const DetailRow& r);
 
 // One row of the last iteration's update (RectifiedMatcher::refine) over [lo, hi): d = NaN where not
 // solved, else d += step + (move if both the detail q and move = q_win - q lie within 3 sigma =
-// 3 sqrt(s2 z) / a, else 0).
+// 3 sqrt(s2 z), else 0).
 struct UpdateRow {
-  const float *solved, *step, *q, *q_win, *s2, *z, *a;
+  const float *solved, *step, *q, *q_win, *s2, *z;
   float* d;
   int lo, hi;
 };

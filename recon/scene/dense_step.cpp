@@ -33,7 +33,7 @@ NANEYE_SIMD_INLINE void step_lanes(const float* const s[9], const float* m_at, c
   // d - d is NaN unless d is finite; NaN compares unequal.
   const VI bad = (d - d != zero) | (load<V>(m_at) == zero) | (N < 4.f) | ~(det > zero);
   const VI ok = ~bad & (na > zero);
-  V q = nc / na;
+  V q = nc / det;  // G is the left's gradient (a times the right's): c is the step itself
   q = q < -half ? -half : half < q ? half : q;
   solved = ok ? one : zero;
   refused = bad ? one : zero;

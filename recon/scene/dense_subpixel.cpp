@@ -1,13 +1,21 @@
 // The rectified matcher's sub-pixel step and its noise correlation (dense_match.hpp).
 //
 // Model per pixel p, over its window: L(x) = a R(x - d_x) + b, each window pixel x at its own current
-// disparity d_x, linearised in a common step: R(x - d_x - delta) ~ W_x - G_x delta (W the right image
-// sampled there, G its x derivative). With c = a delta the model is linear in (a, b, c): regressors
-// W, 1, -G. Eliminating b by centring (window means), the normal equations are 2 x 2:
+// disparity d_x, linearised in a common step: a R(x - d_x - delta) ~ a W_x - G_x delta (W the right
+// image sampled there; G the left image's x derivative, which is a R'(x - d_x) where the model holds:
+// the gradient of the template, as in inverse-compositional LK, Baker & Matthews 2004). The model is
+// linear in (a, b, c = delta): regressors W, 1, -G. Eliminating b by centring (window means), the
+// normal equations are 2 x 2:
 //   [Sww  -Swg] [a]   [ Swl]
-//   [-Swg  Sgg] [c] = [-Sgl],   S.. the centred window sums (Gauss-Newton, e.g. Baker & Matthews 2004).
+//   [-Swg  Sgg] [c] = [-Sgl],   S.. the centred window sums.
 // Every sum is a box filter of a per-pixel product, so the cost per pixel does not depend on the
-// window. Var(c) = s^2 (A^-1)_cc with s^2 = SSR / (N - 3); delta = c / a, so sigma_d = sigma_c / a.
+// window. Var(c) = s^2 (A^-1)_cc with s^2 = SSR / (N - 3), corrected for the regressors' noise
+// (dense_match.cpp, eiv_zc). Why the left's gradient and not the right's (until 2026-12-06): the right's,
+// sampled with W from the same spline, shares W's interpolated noise, E[n_W n_G] = v_r sum_k
+// eta_k(t) eta_k'(t) at the sample's fraction t, and the normal equations then move the step by
+// N E[n_W n_G] / Sgg, a bias of up to 0.7 sigma at low signal to noise, zero only at t = 0 and 1/2
+// (bench_dense_snr, docs/scene.md "The gradient from the left"). The left's gradient is taken at its
+// pixels by an odd filter, whose noise is uncorrelated with the same pixel's (rho is even).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +23,7 @@
 
 #include "../corners/simd.hpp"
 #include "dense_simd.hpp"
+#include "naneye/recon/scene/bspline.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "select.hpp"
 
@@ -53,6 +62,7 @@ void RectifiedMatcher::gather(const cv::Mat& left, bool last) {
   for (int y = 0; y < h_; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * w_;
     g.left = left.ptr<float>(y);
+    g.left_grad = left_grad_.data() + row;
     g.right = right_spline_.data() + row;
     g.taps_ok = taps_ok_.data() + row;
     g.d = d_.data() + row;
@@ -175,7 +185,6 @@ void RectifiedMatcher::refine(const cv::Mat& left, const cv::Mat& valid_left) {
         u.q_win = q_win + row;
         u.s2 = s2_.data() + row;
         u.z = z_.data() + row;
-        u.a = a_.data() + row;
         u.d = d_.data() + row;
         u.lo = span_lo_[static_cast<std::size_t>(y)];
         u.hi = span_hi_[static_cast<std::size_t>(y)];
@@ -294,9 +303,26 @@ void RectifiedMatcher::correlation(const cv::Mat&) {
   const double e0 = acc[kLag][kLag] > 0 ? acc[kLag][kLag] : 1.0;
   for (int k = 0; k < kSide * kSide; ++k)
     rho_[static_cast<std::size_t>(k)] = static_cast<float>(acc[k / kSide][k % kSide] / e0);
-  // The right image's gradient is a central difference over +-1 px along the rows: (1 - rho(2)) / 2
-  // of its value's noise variance, rho(2) the residual's lag-2 autocorrelation (validate(), eiv_zc).
-  grad_noise_ratio_ = 0.5 * (1.0 - rho_[static_cast<std::size_t>(kLag * kSide + kLag + 2)]);
+  // The left gradient's noise (eiv_zc): the left pixels' noise through D, the spline's derivative
+  // filter, correlated as the residual is along the rows (measured to lag 3, none beyond). White:
+  // 1.392 and 1.392.
+  const auto rho_row = [&](int l) {
+    l = std::abs(l);
+    return l > kLag ? 0.0 : static_cast<double>(rho_[static_cast<std::size_t>(kLag * kSide + kLag + l)]);
+  };
+  constexpr int kD = kKnotDerivativeReach;
+  const auto D = [&](int k) { return knot_d_[static_cast<std::size_t>(k + kD)]; };
+  double ratio = 0, cross = 0;
+  for (int k = -kD; k <= kD; ++k)
+    for (int l = -kD; l <= kD; ++l) ratio += D(k) * D(l) * rho_row(k - l);
+  const auto shared = [&](int lag) {  // E[G's noise at x times the left noise at x + lag] / vl
+    double v = 0;
+    for (int k = -kD; k <= kD; ++k) v += D(k) * rho_row(lag - k);
+    return v;
+  };
+  for (int lag = -kD - kLag; lag <= kD + kLag; ++lag) cross -= shared(lag) * shared(-lag);
+  grad_noise_ratio_ = ratio;
+  grad_cross_ratio_ = cross;
   // kappa = sum_ij z_i z_j rho_ij / sum_i z_i^2 over the window, z the derivative regressor centred
   // on the window: the variance of the sandwich estimate over the white-noise one.
   float* z = chan_.data() + 4 * n;

@@ -105,11 +105,12 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
   std::mt19937 rng(5);
   constexpr int w = 83;
   std::uniform_real_distribution<float> val(0.f, 900.f), disp(-2.f, 30.f);
-  std::vector<float> left(w), right(w), d(w);
+  std::vector<float> left(w), right(w), grad(w), d(w);
   std::vector<std::uint8_t> valid(w), ok(w);
   for (int x = 0; x < w; ++x) {
     left[x] = val(rng);
     right[x] = val(rng);
+    grad[x] = x % 23 == 4 ? NAN : val(rng) - 450.f;  // NaN: the left has no gradient there
     d[x] = x % 11 == 5 ? NAN : disp(rng);
     // Infinite references fail the AVX2 build's range test on the floor, as isfinite does.
     if (x % 13 == 7) d[x] = x % 2 ? INFINITY : -INFINITY;
@@ -124,6 +125,7 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
     std::vector<float> ch(10 * w, -1.f);
     dense_simd::GatherRow g{};
     g.left = left.data();
+    g.left_grad = grad.data();
     g.right = right.data();
     g.taps_ok = ok.data();
     g.d = d.data();
@@ -138,16 +140,13 @@ TEST(DenseKernels, GatherGivesTheScalarLoopsBits) {
       if (std::isfinite(d[x])) {
         const float xs = static_cast<float>(x) - d[x];
         const int i0 = static_cast<int>(std::floor(xs));
-        if (i0 >= 1 && i0 + 2 < w && ok[i0]) {
-          // The cubic B-spline's weights and their derivatives (the row holds its coefficients).
+        if (i0 >= 1 && i0 + 2 < w && ok[i0] && std::isfinite(grad[x])) {
+          // The cubic B-spline's weights (the row holds its coefficients).
           const float t = xs - static_cast<float>(i0), t2 = t * t, t3 = t2 * t, s = 1.f - t;
           const float wk[4] = {(1.f / 6.f) * (s * s * s), 0.5f * t3 - t2 + 2.f / 3.f,
                                -0.5f * t3 + 0.5f * t2 + 0.5f * t + 1.f / 6.f, (1.f / 6.f) * t3};
-          const float dk[4] = {-0.5f * (s * s), 1.5f * t2 - 2.f * t, -1.5f * t2 + t + 0.5f, 0.5f * t2};
-          for (int k = 0; k < 4; ++k) {
-            W += wk[k] * (right[i0 - 1 + k] - mu);
-            G += dk[k] * (right[i0 - 1 + k] - mu);
-          }
+          for (int k = 0; k < 4; ++k) W += wk[k] * (right[i0 - 1 + k] - mu);
+          G = grad[x];
           l = left[x] - mu;
           m = 1;
         }
@@ -212,7 +211,7 @@ TEST(DenseKernels, StepRowGivesTheScalarLoopsBits) {
         } else if (!std::isfinite(d[x]) || m[x] == 0 || N < 4 || !(det > 0)) {
           want_d = NAN;
         } else if (na > 0) {
-          want_out = d[x] + std::clamp(nc / na, -0.5f, 0.5f);
+          want_out = d[x] + std::clamp(nc / det, -0.5f, 0.5f);
           want_solved = 1;
         }
         const char* b = avx2 ? "avx2 " : "sse ";

@@ -6,11 +6,13 @@
 //      disparity band, census cost, five paths, its left-right check, no uniqueness or speckle
 //      filter: the other decisions are ours, below;
 //   2. sub-pixel: Gauss-Newton on the rectified pixels, every pixel's own window with a gain and an
-//      offset between the eyes (L = a R(x - d) + b), the right rows sampled by the cubic B-spline
-//      (bspline.hpp: Keys' cubic, until 2026-12-06, biased the step towards whole pixels), each pixel
-//      of the window warped by its own disparity (so slanted surfaces keep their shape); the window sums are
-//      box filters, so every pixel costs the same;
-//   3. sigma per pixel from the fit: s^2 (A^-1)_dd / a^2 (A the normal matrix, s^2 the window's
+//      offset between the eyes (L = a R(x - d) + b), linearised with the left's gradient (the
+//      template's, which shares no noise with the right's samples), the right rows sampled by the cubic
+//      B-spline (bspline.hpp: Keys' cubic, until 2026-12-06, biased the step towards whole pixels), each
+//      pixel of the window warped by its own disparity (so slanted surfaces keep their shape); the window
+//      sums are box filters, so every pixel costs the same;
+//   3. sigma per pixel from the fit: s^2 (A^-1)_dd (A the normal matrix, both regressors' noise taken out;
+//   s^2 the window's
 //      residual variance, floored at the median of windows of its kind), times the correlation
 //      factor of the residual noise measured on the pair itself (interpolation and a Bayer filter
 //      make neighbouring pixels' noise correlated);
@@ -181,12 +183,14 @@ class RectifiedMatcher {
   // What the sub-pixel step reads of the right image, once per pair whatever the radii tried: its
   // rows' B-spline coefficients (right_spline_) and the taps' validity (taps_ok_).
   void prepare_right(const cv::Mat& right, const cv::Mat& valid_right);
+  // The left image's gradient along the rows (left_grad_), once per pair (dense_subpixel.cpp).
+  void left_gradient(const cv::Mat& left, const cv::Mat& valid_left);
   void level_medians(float min_n);
   void window_features(std::size_t i, float f[2]) const;
   int bin_of(const float f[2]) const;
   double expected_dof(std::size_t i) const;
   double expected_residual(std::size_t i) const;
-  // The last fit's (A^-1)_cc with the right image's noise taken out of A (dense_match.cpp).
+  // The last fit's (A^-1)_cc with both regressors' noise taken out of A (dense_match.cpp).
   double eiv_zc(std::size_t i) const;
 
   // Residual variance per kind of window, 8 x 8 bins of (mean level, log contrast): shot noise is
@@ -233,11 +237,19 @@ class RectifiedMatcher {
   // The right image's rows as cubic B-spline coefficients, each run of valid pixels on its own
   // (bspline.hpp): what the sub-pixel step samples.
   std::vector<float> right_spline_;
+  // The left image's gradient along the rows: the derivative of its cubic B-spline interpolant at
+  // the pixels (bspline_knot_derivative_tap), each run of valid pixels on its own; NaN where a
+  // pixel or either neighbour has no data. The fit's gradient regressor (dense_subpixel.cpp).
+  std::vector<float> left_grad_;
+  std::array<double, 25> knot_d_{};                // bspline_knot_derivative_tap(-12 .. 12)
   std::vector<std::uint8_t> taps_ok_;              // right pixels whose 4 cubic taps are all valid
   bool avx2_ = false;                              // the plane kernels' 8-float versions (dense_simd.hpp)
   std::array<std::uint32_t, 4096> select_hist_{};  // the medians' counts (scene/select.hpp)
   double residual_sigma_ = 0, kappa_ = 1;
-  double grad_noise_ratio_ = 0.5;  // the right gradient's noise variance per its value's (correlation())
+  // The left gradient's noise variance per the left pixels' (sum_kl D_k D_l rho(k - l)), and the
+  // share of it the residual shares at the neighbouring pixels (-sum_m e(m) e(-m), e = D * rho),
+  // both for the pair's measured noise correlation rho along the rows (correlation(), eiv_zc).
+  double grad_noise_ratio_ = 1.392, grad_cross_ratio_ = 1.392;
 };
 
 }  // namespace naneye::recon::scene
