@@ -17,6 +17,22 @@
 namespace naneye::recon::scene {
 namespace {
 
+// f(x, n) for every run of n consecutive non-zero entries of valid[0 .. w) starting at x: a row's
+// spline is prefiltered one run at a time, so that no pixel beyond the mask reaches a coefficient.
+template <class F>
+void each_valid_run(const std::uint8_t* valid, int w, F&& f) {
+  for (int x = 0; x < w;) {
+    if (!valid[x]) {
+      ++x;
+      continue;
+    }
+    int end = x;
+    while (end < w && valid[end]) ++end;
+    f(x, end - x);
+    x = end;
+  }
+}
+
 SgmSettings sgm_settings(const MatcherSettings& s) {
   SgmSettings g;
   g.min_disparity = s.min_disparity;
@@ -166,19 +182,11 @@ void RectifiedMatcher::left_gradient(const cv::Mat& left, const cv::Mat& valid_l
     const std::uint8_t* v = valid_left.ptr<std::uint8_t>(y);
     float* g = left_grad_.data() + static_cast<std::size_t>(y) * w_;
     std::fill(g, g + w_, kNoMatch);
-    for (int x = 0; x < w_;) {
-      if (!v[x]) {
-        ++x;
-        continue;
-      }
-      int end = x;
-      while (end < w_ && v[end]) ++end;
-      if (end - x >= 3) {
-        bspline_coefficients_line(l + x, end - x, c);
-        for (int k = 1; k + 1 < end - x; ++k) g[x + k] = 0.5f * (c[k + 1] - c[k - 1]);
-      }
-      x = end;
-    }
+    each_valid_run(v, w_, [&](int x, int n) {
+      if (n < 3) return;
+      bspline_coefficients_line(l + x, n, c);
+      for (int k = 1; k + 1 < n; ++k) g[x + k] = 0.5f * (c[k + 1] - c[k - 1]);
+    });
   }
 }
 
@@ -191,16 +199,9 @@ void RectifiedMatcher::prepare_right(const cv::Mat& right, const cv::Mat& valid_
     const std::uint8_t* v = valid_right.ptr<std::uint8_t>(y);
     float* out = right_spline_.data() + static_cast<std::size_t>(y) * w_;
     std::copy_n(r, w_, out);  // invalid pixels: never a tap of a valid sample (taps_ok_)
-    for (int x = 0; x < w_;) {
-      if (!v[x]) {
-        ++x;
-        continue;
-      }
-      int end = x;
-      while (end < w_ && v[end]) ++end;
-      if (end - x >= 2) bspline_coefficients_line(r + x, end - x, out + x);
-      x = end;
-    }
+    each_valid_run(v, w_, [&](int x, int n) {
+      if (n >= 2) bspline_coefficients_line(r + x, n, out + x);
+    });
   }
   // The taps' test 16 pixels at a time (SSE2 vectors): as a plain loop its four branches per pixel
   // were most of the ~3 M instructions a pair the sub-pixel step's two masks cost.
