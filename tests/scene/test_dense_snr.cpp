@@ -77,8 +77,9 @@ Figures run(double disparity, double noise_dn, int seeds) {
   f.bias_over_sigma = std::sqrt(std::max(0.0, bias / m));
   f.spread_over_sigma = std::sqrt(spread / m);
   f.err_over_sigma = std::sqrt(err / m);
-  std::printf("disparity %.2f, noise %.0f DN: %d pixels, bias/sigma %.3f, spread/sigma %.3f, err/sigma %.3f\n",
-              disparity, noise_dn, f.pixels, f.bias_over_sigma, f.spread_over_sigma, f.err_over_sigma);
+  std::printf(
+      "disparity %.2f, noise %.0f DN: %d pixels, bias/sigma %.3f, spread/sigma %.3f, err/sigma %.3f\n",
+      disparity, noise_dn, f.pixels, f.bias_over_sigma, f.spread_over_sigma, f.err_over_sigma);
   return f;
 }
 
