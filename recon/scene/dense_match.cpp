@@ -385,7 +385,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
         ++c.shift;
         continue;
       }
-      const double zc = eiv_zc(i);  // G is the left's gradient: c is the step itself, no 1 / a
+      const double zc = eiv_zc(i);
       // The window's residual variance is a 49-121 pixel estimate (~20-30 % spread): one low by
       // chance would claim less noise than the pair has for such a window. Never below the median of
       // its kind; its own excess where it has one (the chi-square test below bounds that).
@@ -393,6 +393,7 @@ void RectifiedMatcher::validate(const cv::Mat& valid_left) {
       // (No median at all, when no window had a residual: the window's own.)
       const double kind = expected_residual(i);
       const double s2 = std::isfinite(kind) ? std::max(static_cast<double>(s2_[i]), kind) : s2_[i];
+      // G is the left's gradient, a times the right's: c is the step itself, its sigma no 1 / a.
       const double sigma = std::sqrt(std::max(0.f, kappa_px_[i]) * s2 * zc);
       if (!(sigma <= s_.max_sigma_px)) {
         ++c.texture;

@@ -11,11 +11,10 @@
 //      B-spline (bspline.hpp: Keys' cubic, until 2026-12-06, biased the step towards whole pixels), each
 //      pixel of the window warped by its own disparity (so slanted surfaces keep their shape); the window
 //      sums are box filters, so every pixel costs the same;
-//   3. sigma per pixel from the fit: s^2 (A^-1)_dd (A the normal matrix, both regressors' noise taken out;
-//   s^2 the window's
-//      residual variance, floored at the median of windows of its kind), times the correlation
-//      factor of the residual noise measured on the pair itself (interpolation and a Bayer filter
-//      make neighbouring pixels' noise correlated);
+//   3. sigma per pixel from the fit: s^2 (A^-1)_dd (A the normal matrix, both regressors' noise
+//      taken out; s^2 the window's residual variance, floored at the median of windows of its
+//      kind), times the correlation factor of the residual noise measured on the pair itself
+//      (interpolation and a Bayer filter make neighbouring pixels' noise correlated);
 //   4. validity: refinement converged near the integer stage; sigma small enough that the integer
 //      stage's half-pixel basin holds at 3 sigma; the residual consistent with the pair's noise
 //      (a chi-square test against the median window); a left-right check (the integer stage's: the
