@@ -22,9 +22,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "../tests/support/seed_spread.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
@@ -59,12 +61,10 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
   sensor.white_dn = c.white_dn;
   sim::TexturedSceneSettings scene = *sim::textured_preset(c.preset);
   scene.texture.contrast *= c.contrast_factor;
-  std::vector<double> s1, s2, sig2, e2;
-  std::vector<int> count;
   recon::scene::SparseReconstructor luma(rig);
   recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap map;
-  std::vector<float> ratio;  // |err| / sigma per pixel and seed: the error's distribution, not only its rms
+  std::optional<test::SeedSpread> tally;
   double misfit2 = 0;
   int misfit_n = 0, radius = 0;
   for (int k = 0; k <= seeds; ++k) {
@@ -76,70 +76,27 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
     luma.load_luma(sim::raw_view(p.left, c.bayer), sim::raw_view(p.right, c.bayer));
     dense.reconstruct(luma.luma(), map);
     if (k < seeds) radius = dense.matcher().radius_used();
-    if (count.empty()) {
-      const std::size_t n = static_cast<std::size_t>(map.width) * map.height;
-      for (auto* v : {&s1, &s2, &sig2, &e2}) v->assign(n, 0.0);
-      count.assign(n, 0);
-      ratio.assign(n * static_cast<std::size_t>(seeds), 0.f);
-    }
+    if (!tally) tally.emplace(static_cast<std::size_t>(map.width) * map.height, seeds);
     for (int r = 0; r < map.height; ++r)
       for (int col = 0; col < map.width; ++col) {
         const std::size_t i = static_cast<std::size_t>(r) * map.width + col;
         const double z = map.z_at(col, r), zt = p.depth.at<double>(r, col);
         const bool ok = std::isfinite(z) && std::isfinite(zt);
         if (k < seeds) {
-          if (!ok) {
-            count[i] = -1;  // out for good: the figures are over pixels valid in every render
-            continue;
-          }
-          if (count[i] < 0) continue;
-          const double sg = map.sigma_at(col, r);
-          s1[i] += z;
-          s2[i] += z * z;
-          sig2[i] += sg * sg;
-          e2[i] += (z - zt) * (z - zt) / (sg * sg);
-          ratio[i * static_cast<std::size_t>(seeds) + static_cast<std::size_t>(k)] =
-              static_cast<float>(std::abs(z - zt) / sg);
-          ++count[i];
-        } else if (ok && count[i] == seeds) {
-          misfit2 += (z - zt) * (z - zt) / (sig2[i] / seeds);
+          if (ok)
+            tally->add(i, k, z, map.sigma_at(col, r), zt);
+          else
+            tally->drop(i);  // out for good: the figures are over pixels valid in every render
+        } else if (ok && tally->complete(i)) {
+          misfit2 += (z - zt) * (z - zt) / tally->mean_sigma2(i);
           ++misfit_n;
         }
       }
   }
-  double spread = 0, err = 0, core2 = 0;
-  int m = 0, tail = 0, core = 0;
-  std::vector<float> valid_ratio;
-  for (std::size_t i = 0; i < count.size(); ++i) {
-    if (count[i] != seeds) continue;
-    for (int k = 0; k < seeds; ++k) {
-      const float q = ratio[i * static_cast<std::size_t>(seeds) + static_cast<std::size_t>(k)];
-      valid_ratio.push_back(q);
-      if (q > kTail) {
-        ++tail;
-      } else {
-        core2 += static_cast<double>(q) * q;
-        ++core;
-      }
-    }
-    const double mean = s1[i] / seeds;
-    spread += (s2[i] - seeds * mean * mean) / (seeds - 1) / (sig2[i] / seeds);
-    err += e2[i] / seeds;
-    ++m;
-  }
-  // The 68.27 % quantile of |err / sigma|: 1 for a Gaussian error of that sigma, and unmoved by a
-  // few gross errors, which the rms is not.
-  double p68 = 0;
-  if (!valid_ratio.empty()) {
-    auto mid = valid_ratio.begin() + static_cast<std::ptrdiff_t>(0.6827 * (valid_ratio.size() - 1));
-    std::nth_element(valid_ratio.begin(), mid, valid_ratio.end());
-    p68 = *mid;
-  }
-  const double all = std::max<std::size_t>(1, valid_ratio.size());
+  const test::SeedSpread::Summary f = tally->summary(kTail);
   std::printf("%-18s %-5s %2d %7d %8.3f %9.3f %8.3f %6.3f %7.3f%% %8.3f\n", c.label,
-              c.bayer ? "bayer" : "mono", radius, m, std::sqrt(spread / std::max(1, m)),
-              std::sqrt(misfit2 / std::max(1, misfit_n)), std::sqrt(err / std::max(1, m)), p68,
-              100.0 * tail / all, std::sqrt(core2 / std::max(1, core)));
+              c.bayer ? "bayer" : "mono", radius, f.pixels, f.spread,
+              std::sqrt(misfit2 / std::max(1, misfit_n)), f.err, f.p68, 100.0 * f.tail_share, f.core);
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "../tests/support/seed_spread.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "naneye/sim/wave_pair.hpp"
 
@@ -39,10 +40,7 @@ void run(double blur_px, double contrast, double noise_dn, int seeds, double mea
   const cv::Mat right0 = sim::render_waves(w, kWidth, kHeight, mean_dn, disparity_px);
   const cv::Mat valid(kHeight, kWidth, CV_8UC1, cv::Scalar(255));
   recon::scene::RectifiedMatcher matcher(kWidth, kHeight);
-  const std::size_t n = static_cast<std::size_t>(kWidth) * kHeight;
-  std::vector<double> s1(n), s2(n), sig2(n), e2(n);
-  std::vector<int> count(n, 0);
-  std::vector<float> ratio(n * static_cast<std::size_t>(seeds)), sigmas;
+  test::SeedSpread tally(static_cast<std::size_t>(kWidth) * kHeight, seeds);
   double misfit2 = 0;
   int misfit_n = 0;
   for (int k = 0; k <= seeds; ++k) {
@@ -83,51 +81,21 @@ void run(double blur_px, double contrast, double noise_dn, int seeds, double mea
         const double di = d.at<float>(y, x), si = s.at<float>(y, x);
         const bool ok = std::isfinite(di) && std::isfinite(si) && si > 0;
         if (k < seeds) {
-          if (!ok) {
-            count[i] = -1;
-            continue;
-          }
-          if (count[i] < 0) continue;
-          s1[i] += di;
-          s2[i] += di * di;
-          sig2[i] += si * si;
-          e2[i] += (di - disparity_px) * (di - disparity_px) / (si * si);
-          ratio[i * static_cast<std::size_t>(seeds) + static_cast<std::size_t>(k)] =
-              static_cast<float>(std::abs(di - disparity_px) / si);
-          ++count[i];
-        } else if (ok && count[i] == seeds) {
-          misfit2 += (di - disparity_px) * (di - disparity_px) / (sig2[i] / seeds);
+          if (ok)
+            tally.add(i, k, di, si, disparity_px);
+          else
+            tally.drop(i);
+        } else if (ok && tally.complete(i)) {
+          misfit2 += (di - disparity_px) * (di - disparity_px) / tally.mean_sigma2(i);
           ++misfit_n;
         }
       }
   }
-  double spread = 0, err = 0, bias = 0;
-  int m = 0;
-  std::vector<float> valid_ratio;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (count[i] != seeds) continue;
-    const double mean = s1[i] / seeds;
-    spread += (s2[i] - seeds * mean * mean) / (seeds - 1) / (sig2[i] / seeds);
-    err += e2[i] / seeds;
-    // The seeds' mean off the truth, less what K seeds' noise leaves in a mean: a bias they share.
-    bias += ((mean - disparity_px) * (mean - disparity_px) -
-             (s2[i] - seeds * mean * mean) / (seeds - 1) / seeds) /
-            (sig2[i] / seeds);
-    sigmas.push_back(static_cast<float>(std::sqrt(sig2[i] / seeds)));
-    for (int k = 0; k < seeds; ++k) valid_ratio.push_back(ratio[i * static_cast<std::size_t>(seeds) + k]);
-    ++m;
-  }
-  const auto quantile = [](std::vector<float>& v, double q) {
-    if (v.empty()) return 0.0;
-    auto it = v.begin() + static_cast<std::ptrdiff_t>(q * (v.size() - 1));
-    std::nth_element(v.begin(), it, v.end());
-    return static_cast<double>(*it);
-  };
+  const test::SeedSpread::Summary f = tally.summary(4.f);
   std::printf("%6.3f %5.0f %5s %5.2f %6.1f %6.1f %7.1f %2d %6d %8.4f %8.3f %9.3f %8.3f %6.3f %7.3f\n",
               disparity_px, mean_dn, shot ? "shot" : "-", blur_px, contrast, noise_dn, contrast / noise_dn,
-              matcher.radius_used(), m, quantile(sigmas, 0.5), std::sqrt(spread / std::max(1, m)),
-              std::sqrt(misfit2 / std::max(1, misfit_n)), std::sqrt(err / std::max(1, m)),
-              quantile(valid_ratio, 0.6827), std::sqrt(std::max(0.0, bias / std::max(1, m))));
+              matcher.radius_used(), f.pixels, f.sigma_median, f.spread,
+              std::sqrt(misfit2 / std::max(1, misfit_n)), f.err, f.p68, tally.bias_over_sigma(disparity_px));
 }
 
 }  // namespace

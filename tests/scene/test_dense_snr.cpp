@@ -12,17 +12,15 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "../support/seed_spread.hpp"
 #include "naneye/recon/scene/dense_match.hpp"
 #include "naneye/sim/wave_pair.hpp"
 
 namespace naneye::dense_snr_test {
 namespace {
 
-struct Figures {
-  int pixels = 0;              // valid in every seed
+struct Figures : test::SeedSpread::Summary {
   double bias_over_sigma = 0;  // rms over pixels of the seeds' mean error, less its noise, / sigma
-  double spread_over_sigma = 0;
-  double err_over_sigma = 0;
 };
 
 // K noisy renders of the texture's pair at `disparity` (noise_dn per pixel and eye), matched with a
@@ -37,9 +35,7 @@ Figures run(double disparity, double noise_dn, int seeds) {
   recon::scene::MatcherSettings ms;
   ms.max_radius = ms.radius;
   recon::scene::RectifiedMatcher matcher(w, h, ms);
-  const std::size_t n = static_cast<std::size_t>(w) * h;
-  std::vector<double> s1(n), s2(n), sig2(n), e2(n);
-  std::vector<int> count(n, 0);
+  test::SeedSpread tally(static_cast<std::size_t>(w) * h, seeds);
   for (int k = 0; k < seeds; ++k) {
     cv::Mat nl(h, w, CV_32FC1), nr(h, w, CV_32FC1);
     cv::RNG rng(1000 + static_cast<std::uint64_t>(k));
@@ -50,36 +46,17 @@ Figures run(double disparity, double noise_dn, int seeds) {
       for (int x = 0; x < w; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * w + x;
         const double d = matcher.disparity().at<float>(y, x), s = matcher.sigma().at<float>(y, x);
-        if (!(std::isfinite(d) && s > 0)) {
-          count[i] = -1;
-          continue;
-        }
-        if (count[i] < 0) continue;
-        s1[i] += d;
-        s2[i] += d * d;
-        sig2[i] += s * s;
-        e2[i] += (d - disparity) * (d - disparity) / (s * s);
-        ++count[i];
+        if (std::isfinite(d) && s > 0)
+          tally.add(i, k, d, s, disparity);
+        else
+          tally.drop(i);
       }
   }
-  Figures f;
-  double bias = 0, spread = 0, err = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (count[i] != seeds) continue;
-    const double mean = s1[i] / seeds, var = (s2[i] - seeds * mean * mean) / (seeds - 1);
-    const double sigma2 = sig2[i] / seeds;
-    bias += ((mean - disparity) * (mean - disparity) - var / seeds) / sigma2;
-    spread += var / sigma2;
-    err += e2[i] / seeds;
-    ++f.pixels;
-  }
-  const double m = std::max(1, f.pixels);
-  f.bias_over_sigma = std::sqrt(std::max(0.0, bias / m));
-  f.spread_over_sigma = std::sqrt(spread / m);
-  f.err_over_sigma = std::sqrt(err / m);
+  Figures f{tally.summary(4.f)};
+  f.bias_over_sigma = tally.bias_over_sigma(disparity);
   std::printf(
       "disparity %.2f, noise %.0f DN: %d pixels, bias/sigma %.3f, spread/sigma %.3f, err/sigma %.3f\n",
-      disparity, noise_dn, f.pixels, f.bias_over_sigma, f.spread_over_sigma, f.err_over_sigma);
+      disparity, noise_dn, f.pixels, f.bias_over_sigma, f.spread, f.err);
   return f;
 }
 
@@ -92,8 +69,8 @@ TEST(DenseSnr, NoiseCausesNoBiasAtAQuarterPixel) {
   // The estimate's own bias from 4 seeds has a spread of its own (~0.1 sigma): 0.3 sigma is clear of
   // it and of the 0.74 sigma the right gradient gave.
   EXPECT_LT(f.bias_over_sigma, 0.3);
-  EXPECT_GT(f.err_over_sigma, 0.7);
-  EXPECT_LT(f.err_over_sigma, 1.2);
+  EXPECT_GT(f.err, 0.7);
+  EXPECT_LT(f.err, 1.2);
 }
 
 // A whole-pixel disparity: where the right gradient's noise was largest and the sigma understated
@@ -101,8 +78,8 @@ TEST(DenseSnr, NoiseCausesNoBiasAtAQuarterPixel) {
 TEST(DenseSnr, SigmaStatesTheSpreadAtAWholePixel) {
   const Figures f = run(12.0, 10.0, 4);
   EXPECT_GT(f.pixels, 10000);
-  EXPECT_GT(f.spread_over_sigma, 0.7);
-  EXPECT_LT(f.spread_over_sigma, 1.2);
+  EXPECT_GT(f.spread, 0.7);
+  EXPECT_LT(f.spread, 1.2);
   EXPECT_LT(f.bias_over_sigma, 0.3);
 }
 
