@@ -132,6 +132,10 @@ TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503
     EXPECT_EQ(j["http"]["idle_evicted"], 1);
     EXPECT_EQ(j["http"]["refused"], 0);
   }
+  // The idle ones just closed count against the cap until the daemon has seen them go; a slow
+  // connection arriving before that, its head not yet sent, was the newest with nothing to read and
+  // was refused in the late one's place (1 run in 30 with both cores busy).
+  wait_status([](const nlohmann::json& s) { return s["http"]["connections"].get<int>() <= 1; });
   // Eight connections in the middle of their heads hold every place: the ninth is told at once.
   std::vector<std::unique_ptr<RawClient>> slow;
   for (int i = 0; i < 8; ++i) {
@@ -143,7 +147,11 @@ TEST_F(NaneyedTest, PastTheConnectionCapIdleConnectionsMakeRoomAndSlowOnesGet503
   // an unread connection was evicted as idle and the ninth served).
   RawClient late(port);
   late.send("GET /v1/status HTTP/1.1\r\n\r\n");
-  const std::string r = late.read_all(std::chrono::milliseconds(1000));
+  // The refusal closes the connection, so this returns at once; the bound only says how long a loaded
+  // host may keep the gate's poll thread (which runs niced) from getting to it: 1 s was the one bound
+  // here a slow poll thread could miss (this test failed once in a full ctest -j2 beside the scene
+  // tests, its assertion unrecorded; not reproduced).
+  const std::string r = late.read_all(std::chrono::milliseconds(5000));
   EXPECT_EQ(status_of(r), 503) << r;
   EXPECT_NE(r.find("too_many_connections"), std::string::npos) << r;
   EXPECT_NE(r.find("Retry-After: 1"), std::string::npos) << r;
