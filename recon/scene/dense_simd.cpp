@@ -102,7 +102,7 @@ NANEYE_SIMD_INLINE void box_sum_v(const float* __restrict in, float* __restrict 
 
 template <class V>
 NANEYE_SIMD_INLINE void box_sum_any(const float* in, float* out, float* tmp, const Spans& sp, int r) {
-  // The radii the matcher chooses from (MatcherSettings::radius .. max_radius, 3 .. 5 by default)
+  // The radii the matcher chooses from (MatcherSettings::radius .. max_radius, 3 .. 6 by default)
   // and twice them (reference_detail); any other through the general loop (the same sums' bits).
   switch (r) {
     case 3:
@@ -117,6 +117,8 @@ NANEYE_SIMD_INLINE void box_sum_any(const float* in, float* out, float* tmp, con
       return box_sum_v<V, 8>(in, out, tmp, sp, r);
     case 10:
       return box_sum_v<V, 10>(in, out, tmp, sp, r);
+    case 12:
+      return box_sum_v<V, 12>(in, out, tmp, sp, r);
     default:
       return box_sum_v<V, 0>(in, out, tmp, sp, r);
   }

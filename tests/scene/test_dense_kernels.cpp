@@ -49,12 +49,12 @@ struct SpanPlane {
 
 TEST(DenseKernels, BoxSumGivesTheScalarSumsBits) {
   std::mt19937 rng(3);
-  for (int trial = 0; trial < 32; ++trial) {
+  for (int trial = 0; trial < 36; ++trial) {
     const SpanPlane p(rng);
-    // 3, 4, 5, 6, 8, 10 have their own unrolled kernels (the matcher's radii and twice them), 2 and 7
-    // the general one.
-    constexpr int kRadii[] = {2, 3, 4, 5, 6, 7, 8, 10};
-    const int r = kRadii[trial % 8];
+    // 3, 4, 5, 6, 8, 10, 12 have their own unrolled kernels (the matcher's radii and twice them), 2
+    // and 7 the general one.
+    constexpr int kRadii[] = {2, 3, 4, 5, 6, 7, 8, 10, 12};
+    const int r = kRadii[trial % 9];
     for (const bool avx2 : dense_kernel_builds()) {
       std::vector<float> out(p.v.size(), -1.f), tmp(static_cast<std::size_t>(p.w));
       dense_simd::box_sum(avx2, p.v.data(), out.data(), tmp.data(), p.spans(), r);
