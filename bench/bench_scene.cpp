@@ -51,6 +51,7 @@
 #include "naneye/recon/pair/opencv_path.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
+#include "naneye/sim/flat_field.hpp"
 #include "naneye/sim/textured.hpp"
 
 namespace {
@@ -313,6 +314,7 @@ int main(int argc, char** argv) {
   int seeds = 3;
   int repeat = 1;  // reconstructions timed per render: > 1 for perf and steadier times
   bool bayer = false, refusals = false, digest = false;
+  int pattern_frames = 0;
   recon::scene::DenseSettings ds;
   recon::scene::SparseSettings ss;
   sim::SensorSettings sensor;
@@ -339,12 +341,27 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--dense-iterations") && i + 1 < argc)
       ds.matcher.iterations = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--defocus") && i + 1 < argc) sensor.defocus_sigma_px = std::atof(argv[++i]);
+    // The error budget: one term of the sensor off, to see what it costs.
+    if (!std::strcmp(argv[i], "--no-fixed-pattern")) {
+      sensor.column_fpn_dn = sensor.dsnu_dn = sensor.prnu = 0.0;
+      sensor.reset_rows = 0;
+    }
+    if (!std::strcmp(argv[i], "--no-noise")) sensor.noise = false;
+    if (!std::strcmp(argv[i], "--no-offsets")) sensor.column_fpn_dn = sensor.dsnu_dn = 0.0;
+    // The fixed pattern measured from N dark and N flat frames and removed from every render before
+    // both paths (docs/sensor-calibration.md): what a user who calibrated the sensor gets.
+    if (!std::strcmp(argv[i], "--fixed-pattern") && i + 1 < argc) pattern_frames = std::atoi(argv[++i]);
   }
   cv::setNumThreads(1);  // one core for both paths
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
   sensor.bayer = bayer;
   const sim::TexturedRenderer renderer(rig, sensor);
+  // A flat at 0.7 of white: ~530 DN of signal at the centre, ~320 at the corners.
+  const recon::StereoFixedPattern pattern =
+      pattern_frames > 0 ? sim::measure_fixed_pattern(sensor, pattern_frames, 0.7, 0xF1A7)
+                         : recon::StereoFixedPattern{};
+  std::vector<std::uint16_t> fixed_left, fixed_right;
   recon::scene::SparseResult res;
   recon::scene::DepthMap depth;
   OpenCvDense cv_dense(rig);
@@ -356,6 +373,12 @@ int main(int argc, char** argv) {
   std::printf("bench_scene: %d renders per scene, %s, blur sigma %.2f px, %s, paper-d3 rig, one thread\n",
               seeds, bayer ? "GRBG Bayer" : "mono", sensor.blur_sigma_px(),
               sensor.dsnu_dn > 0 ? "the real sensor's noise and fixed patterns" : "the simulator's sensor");
+  if (!pattern.left.empty())
+    std::printf(
+        "fixed pattern removed: %d dark + %d flat frames per eye; left DSNU %.2f DN (map se %.2f), PRNU "
+        "%.2f %% (map se %.2f %%)\n",
+        pattern.left.dark_frames, pattern.left.flat_frames, pattern.left.dsnu_dn, pattern.left.dark_se_dn,
+        100 * pattern.left.prnu, 100 * pattern.left.gain_se);
   std::printf("%-10s | %-44s | %-44s\n", "", "ours (sparse)", "OpenCV path");
   std::printf("%-10s | %7s %7s %9s %9s %7s | %7s %7s %9s %9s %7s\n", "scene", "p50 ms", "pts", "good",
               "outl %", "err %", "p50 ms", "pts", "good", "outl %", "err %");
@@ -374,7 +397,17 @@ int main(int argc, char** argv) {
     Digest dg_sparse, dg_dense;
     for (int s = 0; s < seeds; ++s) {
       const sim::TexturedPair p = sim::numbered_render(renderer, name, s);
-      const auto lv = sim::raw_view(p.left, bayer), rv = sim::raw_view(p.right, bayer);
+      auto lv = sim::raw_view(p.left, bayer), rv = sim::raw_view(p.right, bayer);
+      if (!pattern.left.empty()) {
+        fixed_left.resize(p.left.total());
+        fixed_right.resize(p.right.total());
+        recon::remove_fixed_pattern(pattern.left, lv, fixed_left.data());
+        recon::remove_fixed_pattern(pattern.right, rv, fixed_right.data());
+        lv.data = fixed_left.data();
+        rv.data = fixed_right.data();
+        lv.stride = lv.width;
+        rv.stride = rv.width;
+      }
       for (int k = 0; k < repeat; ++k) {
         const double t0 = thread_cpu_s();
         ours.reconstruct(lv, rv, res);

@@ -1,0 +1,18 @@
+#pragma once
+// Both eyes' fixed patterns in one file (docs/sensor-calibration.md): OpenCV FileStorage, so
+// `.yml.gz` compresses (~1 MB of maps to ~0.5 MB) and `.yml` stays readable.
+#include <filesystem>
+
+#include "naneye/recon/camera/fixed_pattern.hpp"
+
+namespace naneye::recon {
+
+struct StereoFixedPattern {
+  FixedPattern left, right;
+};
+
+// Throw std::runtime_error naming the file and what is wrong with it.
+void save_fixed_pattern(const std::filesystem::path& file, const StereoFixedPattern& pattern);
+StereoFixedPattern load_fixed_pattern(const std::filesystem::path& file);
+
+}  // namespace naneye::recon
