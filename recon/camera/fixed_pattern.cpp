@@ -170,9 +170,14 @@ FixedPattern FixedPatternBuilder::build() const {
       for (int dr = -rad; dr <= rad; dr += step)
         for (int dc = -rad; dc <= rad; dc += step) {
           const int rr = r + dr, cc = c + dc;
-          if ((dr == 0 && dc == 0) || !reg.contains(rr, cc) || cc < 0) continue;
+          // Point-symmetric pairs only: at the border a one-sided window would read the shading's
+          // slope as gain (0.2 % in the corners' 30 x 30 blocks), a symmetric one cancels it.
+          if ((dr == 0 && dc == 0) || !reg.contains(rr, cc) || cc < 0 || !reg.contains(r - dr, c - dc) ||
+              c - dc < 0)
+            continue;
           neigh.push_back(signal[static_cast<std::size_t>(rr * width_ + cc)]);
         }
+      if (neigh.size() < 8) continue;  // the first and last used rows: no symmetric neighbourhood
       const double local = median_of(neigh);
       const auto k = static_cast<std::size_t>(r * width_ + c);
       if (local <= 0) continue;

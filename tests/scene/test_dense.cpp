@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <string>
 
+#include "naneye/recon/camera/fixed_pattern.hpp"
 #include "naneye/recon/scene/dense.hpp"
+#include "naneye/sim/flat_field.hpp"
 #include "scene_fixture.hpp"
 
 namespace naneye {
@@ -174,6 +176,31 @@ TEST(DenseMeasuredSensor, TubeSigmaHoldsAtTheWindowCap) {
   const DenseFigures f = run(p, false, map, "tube measured");
   expect_honest(f, map, 1.3, 0.02);
   EXPECT_GE(static_cast<double>(f.covered) / std::max(1, f.truth_visible), 0.15);
+}
+
+// The measured sensor's fixed pattern (DSNU 3.8 DN, PRNU 2 %, column FPN) is noise the eyes do not
+// share: measured from 64 capped and 64 flat frames of the same die and removed
+// (recon/camera/fixed_pattern.hpp), the sphere's coverage passes the 80 % with honest sigmas.
+// This render: 74.5 % as it comes, 83.6 % with the pattern removed, rms(err/sigma) 0.96 -> 0.98
+// (bench_scene --seeds 3
+// --real-sensor [--fixed-pattern 64]: 77.5 -> 85.2 %).
+TEST(DenseMeasuredSensor, FixedPatternRemovedTheSphereReachesTheTarget) {
+  const sim::SensorSettings sensor = sim::SensorSettings::measured(false);
+  const sim::TexturedRenderer renderer(test::paper_d3(), sensor);
+  sim::Rng rng(11);
+  const sim::TexturedPair p = renderer.render(*sim::textured_preset("sphere"), rng);
+  recon::scene::DepthMap map;
+  const DenseFigures raw = run(p, false, map, "sphere measured");
+  const recon::StereoFixedPattern pattern = sim::measure_fixed_pattern(sensor, 64, 0.7, 5);
+  sim::TexturedPair fixed{p.left.clone(), p.right.clone(), p.depth};
+  recon::remove_fixed_pattern(pattern.left, sim::raw_view(p.left), fixed.left.ptr<std::uint16_t>());
+  recon::remove_fixed_pattern(pattern.right, sim::raw_view(p.right), fixed.right.ptr<std::uint16_t>());
+  const DenseFigures f = run(fixed, false, map, "sphere measured, fixed");
+  expect_honest(f, map, 1.4, 0.01);
+  const double before = static_cast<double>(raw.covered) / raw.truth_visible;
+  const double after = static_cast<double>(f.covered) / f.truth_visible;
+  EXPECT_GE(after, 0.80);
+  EXPECT_GE(after - before, 0.04);
 }
 
 INSTANTIATE_TEST_SUITE_P(Conditions, DenseImaging,
