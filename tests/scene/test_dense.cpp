@@ -182,8 +182,7 @@ TEST(DenseMeasuredSensor, TubeSigmaHoldsAtTheWindowCap) {
 // share: measured from 64 capped and 64 flat frames of the same die and removed
 // (recon/camera/fixed_pattern.hpp), the sphere's coverage passes the 80 % with honest sigmas.
 // This render: 74.5 % as it comes, 83.6 % with the pattern removed, rms(err/sigma) 0.96 -> 0.98
-// (bench_scene --seeds 3
-// --real-sensor [--fixed-pattern 64]: 77.5 -> 85.2 %).
+// (bench_scene --seeds 3 --real-sensor [--fixed-pattern 64]: 77.5 -> 85.2 %).
 TEST(DenseMeasuredSensor, FixedPatternRemovedTheSphereReachesTheTarget) {
   const sim::SensorSettings sensor = sim::SensorSettings::measured(false);
   const sim::TexturedRenderer renderer(test::paper_d3(), sensor);
