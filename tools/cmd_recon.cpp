@@ -14,6 +14,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "commands.hpp"
 #include "image_pairs.hpp"
 #include "naneye/app/depth_png.hpp"
+#include "naneye/app/fixed_pattern_step.hpp"
 #include "naneye/app/processor.hpp"
 #include "naneye/app/result_json.hpp"
 #include "naneye/app/scene_json.hpp"
@@ -49,6 +51,7 @@ struct ReconOptions {
   long long max_pairs = -1;
   bool scene = false;
   std::string depth_out;
+  std::string fixed_pattern;  // the sensor's, removed from both frames first (as naneyed's [sensor])
 };
 
 // DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png (issue 14; app/depth_png.hpp's format: 16-bit,
@@ -211,6 +214,23 @@ class SceneStep {
   cv::Mat u16_;
 };
 
+// --fixed-pattern: the frames corrected in place before the board and the scene read them (the
+// CLI owns its frames; naneyed corrects into buffers of its own and keeps the camera's).
+class FixedPatternInPlace {
+ public:
+  FixedPatternInPlace(const ReconOptions& o, const recon::StereoRig& rig) {
+    if (!o.fixed_pattern.empty()) step_.emplace(o.fixed_pattern, rig.left.width(), rig.left.height());
+  }
+  void apply(int eye, std::uint16_t* pixels, const recon::RawImageView& view) {
+    if (!step_) return;
+    const recon::RawImageView fixed = step_->correct(eye, view);
+    std::copy(fixed.data, fixed.data + static_cast<std::size_t>(view.width) * view.height, pixels);
+  }
+
+ private:
+  std::optional<app::FixedPatternStep> step_;
+};
+
 void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
   auto processor = app::make_processor(processor_settings(o));
   processor->set_rig(rig);
@@ -218,6 +238,7 @@ void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
   source->start();
   auto result = std::make_unique<recon::PairResult>();
   SceneStep scene(o, rig);
+  FixedPatternInPlace fixed(o, rig);
   Report report(o.json);
   while (o.max_pairs < 0 || report.pairs() < o.max_pairs) {
     driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
@@ -225,6 +246,8 @@ void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
       if (driver::has_ended(source->state())) break;
       continue;
     }
+    fixed.apply(0, pair->left.pixels.data(), app::image_view(pair->left));
+    fixed.apply(1, pair->right.pixels.data(), app::image_view(pair->right));
     processor->process(*pair, *result);
     scene.run(app::image_view(pair->left), app::image_view(pair->right), result->pair);
     scene.report(report, *result);
@@ -243,6 +266,7 @@ void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
   io.color = o.color == "grbg" ? driver::ColorMode::bayer_grbg : driver::ColorMode::mono;
   recon::StereoReconstructor reconstructor(rig, processor_settings(o).reconstructor);
   SceneStep scene(o, rig);
+  FixedPatternInPlace fixed(o, rig);
   auto result = std::make_unique<recon::PairResult>();
   driver::Image10 left, right;
   Report report(o.json);
@@ -263,6 +287,8 @@ void run_recon_images(const ReconOptions& o, const recon::StereoRig& rig) {
     }
     *result = recon::PairResult{};
     result->pair = i;
+    fixed.apply(0, left.pixels.data(), image_view(left));
+    fixed.apply(1, right.pixels.data(), image_view(right));
     const recon::RawImageView lv = image_view(left), rv = image_view(right);
     reconstructor.process(lv, rv, *result);
     scene.run(lv, rv, i);
@@ -316,6 +342,9 @@ void add_recon_commands(CLI::App& app) {
                   "With the scene: write DIR/depth-NNNNNN.png and DIR/sigma-NNNNNN.png per pair (16-bit, "
                   "0.01 mm per unit on the left raw grid, 0 = no depth), and DIR/calib-sigma-NNNNNN.png "
                   "when the calibration carries its covariance; implies --scene");
+  cmd->add_option("--fixed-pattern", o->fixed_pattern,
+                  "The sensor's fixed pattern (naneye fixed-pattern), removed from both frames first")
+      ->check(CLI::ExistingFile);
   cmd->callback([o] { run_recon(*o); });
 }
 

@@ -8,6 +8,7 @@ void add_calib_commands(CLI::App& app);
 void add_calibrate_commands(CLI::App& app);
 void add_devices_commands(CLI::App& app);
 void add_driver_commands(CLI::App& app);
+void add_fixed_pattern_commands(CLI::App& app);
 void add_sim_commands(CLI::App& app);
 void add_recon_commands(CLI::App& app);
 void add_study_commands(CLI::App& app);

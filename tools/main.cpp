@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   naneye::tools::add_calibrate_commands(app);
   naneye::tools::add_devices_commands(app);
   naneye::tools::add_driver_commands(app);
+  naneye::tools::add_fixed_pattern_commands(app);
   naneye::tools::add_sim_commands(app);
   naneye::tools::add_recon_commands(app);
   naneye::tools::add_study_commands(app);

@@ -3,6 +3,7 @@
 #include <opencv2/core/utility.hpp>
 #include <optional>
 
+#include "naneye/app/fixed_pattern_step.hpp"
 #include "naneye/app/scene_json.hpp"
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
 #include "naneye/recon/scene/dense.hpp"
@@ -67,7 +68,12 @@ class Reconstruction final : public PairProcessor {
       : settings_(s),
         name_(step_name(s)),
         board_wanted_(s.mode != ReconMode::scene),
-        scene_wanted_(s.mode != ReconMode::board) {}
+        scene_wanted_(s.mode != ReconMode::board) {
+    if (!s.fixed_pattern.empty()) {
+      fixed_.emplace(s.fixed_pattern, driver::kSensorSize, driver::kSensorSize);
+      name_ += "; " + fixed_->description();
+    }
+  }
 
   void set_rig(const recon::StereoRig& rig) override {
     if (board_wanted_) {
@@ -86,7 +92,8 @@ class Reconstruction final : public PairProcessor {
   }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
     fill_pair_identity(pair, out);
-    if (board_) board_->process(image_view(pair.left), image_view(pair.right), out);
+    views(pair);
+    if (board_) board_->process(left_, right_, out);
   }
   void process_pair(const driver::StereoPair& pair, recon::PairResult& out, SceneResult& scene,
                     recon::scene::DepthMap* depth) override {
@@ -94,7 +101,7 @@ class Reconstruction final : public PairProcessor {
     scene.clear();
     if (!sparse_) return;
     // One demosaic and one luminance for both scene paths.
-    sparse_->load_luma(image_view(pair.left), image_view(pair.right));
+    sparse_->load_luma(left_, right_);
     sparse_->reconstruct(sparse_->luma(), scene.sparse);
     scene.computed = true;
     if (dense_ && depth) {
@@ -117,6 +124,15 @@ class Reconstruction final : public PairProcessor {
   std::string_view name() const override { return name_; }
 
  private:
+  // The frames every path reads: the pair's own, or with the sensor's fixed pattern removed.
+  void views(const driver::StereoPair& pair) {
+    left_ = image_view(pair.left);
+    right_ = image_view(pair.right);
+    if (!fixed_) return;
+    left_ = fixed_->correct(0, left_);
+    right_ = fixed_->correct(1, right_);
+  }
+
   ProcessorSettings settings_;
   std::string name_;
   bool board_wanted_, scene_wanted_;
@@ -124,6 +140,8 @@ class Reconstruction final : public PairProcessor {
   std::optional<recon::scene::SparseReconstructor> sparse_;
   std::optional<recon::scene::DenseReconstructor> dense_;
   std::size_t map_pixels_ = 0;  // the left raw grid's, for the dense maps' capacity
+  std::optional<FixedPatternStep> fixed_;
+  recon::RawImageView left_, right_;
 };
 
 }  // namespace

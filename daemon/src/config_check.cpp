@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "http_access.hpp"
+#include "naneye/app/fixed_pattern_step.hpp"
 #include "naneye/driver/source_uri.hpp"
 
 namespace naneye::daemon {
@@ -64,6 +65,13 @@ void check_capture(const std::string& path, const std::string& key, const driver
 std::vector<std::string> check_config(const Settings& s, const driver::SourceRegistry& registry) {
   std::vector<std::string> problems;
   http::check_access_files(s, problems);
+  if (!s.processor.fixed_pattern.empty()) {
+    try {
+      app::FixedPatternStep(s.processor.fixed_pattern, driver::kSensorSize, driver::kSensorSize);
+    } catch (const std::exception& e) {
+      problems.push_back(std::string("sensor.fixed_pattern: ") + e.what());
+    }
+  }
   if (s.source_uri == "auto") {
     if (!s.sample_capture.empty())
       check_capture(s.sample_capture.string(), "source.sample_capture", registry, problems);

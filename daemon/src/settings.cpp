@@ -127,6 +127,10 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
          else
            fail(k, "expected one of " + base::enum_names(app::kReconModeNames) + ", got \"" + v + "\"");
        }},
+      {"sensor.fixed_pattern",
+       [&s, base](const toml::node& n, const std::string& k) {
+         s.processor.fixed_pattern = resolve(base, get_string(n, k));
+       }},
       {"pipeline.stall_timeout_ms", integer(s.stall_timeout_ms, 10, 3'600'000)},
       {"pipeline.history", integer(s.history, 4, 4096)},
       {"pipeline.sse_queue_depth", integer(s.sse_queue_depth, 2, 4096)},

@@ -49,6 +49,7 @@ std::string FixedPatternSettings::validate() const {
   if (!(min_flat_signal_dn > 0)) return "min_flat_signal_dn must be > 0";
   if (!(saturation_margin_dn >= 0) || !(white_dn > saturation_margin_dn)) return "bad saturation margin";
   if (!(min_gain > 0 && min_gain < 1 && max_gain > 1)) return "gain range must hold 1";
+  if (!(max_dark_spread_dn > 0)) return "max_dark_spread_dn must be > 0";
   return {};
 }
 
@@ -129,6 +130,11 @@ FixedPattern FixedPatternBuilder::build() const {
       se2.push_back(variance_of_mean(dark_sum_[k], dark_sq_[k], dark_n_));
     }
   p.dsnu_dn = robust_sd_of(used_dark);
+  if (p.dsnu_dn > s_.max_dark_spread_dn)
+    throw std::invalid_argument("fixed pattern: the dark frames spread " +
+                                std::to_string(static_cast<int>(std::lround(p.dsnu_dn))) +
+                                " DN from pixel to pixel (a capped sensor's is a few DN): they saw light; "
+                                "cap the lens");
   double mean_se2 = 0;
   for (double v : se2) mean_se2 += v;
   p.dark_se_dn = std::sqrt(mean_se2 / static_cast<double>(se2.size()));

@@ -193,6 +193,21 @@ TEST_F(NaneyedTest, CheckConfigValidatesAndFlagsOverride) {
   EXPECT_EQ(refused.wait_exit(), 1);
   EXPECT_NE(refused.log().find("pipeline.histroy: unknown key"), std::string::npos) << refused.log();
 
+  // A fixed-pattern file that is not there: --check-config names the key and the file, and naneyed
+  // itself does not start on it.
+  const auto no_pattern = dir.path / "no-pattern.toml";
+  std::ofstream(no_pattern) << "[calibration]\npath = \"" << calib_path()
+                            << "\"\n[sensor]\nfixed_pattern = \"missing-fp.yml.gz\"\n";
+  DaemonProcess unusable({"--config", no_pattern.string(), "--check-config"}, dir.path / "fp.log");
+  EXPECT_EQ(unusable.wait_exit(), 1);
+  EXPECT_NE(unusable.log().find("sensor.fixed_pattern: " + (dir.path / "missing-fp.yml.gz").string()),
+            std::string::npos)
+      << unusable.log();
+  DaemonProcess not_started({"--config", no_pattern.string(), "--source", "file://" + file.string()},
+                            dir.path / "fp-start.log");
+  EXPECT_EQ(not_started.wait_exit(), 1);
+  EXPECT_NE(not_started.log().find("missing-fp.yml.gz: cannot read"), std::string::npos) << not_started.log();
+
   DaemonProcess bad_flag({"--config", good.string(), "--check-config", "--listen", "nowhere"},
                          dir.path / "flag.log");
   EXPECT_EQ(bad_flag.wait_exit(), 1);

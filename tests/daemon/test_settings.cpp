@@ -46,10 +46,13 @@ stall_timeout_ms = 900
 history = 32
 sse_max_clients = 2
 frame_snapshot_interval_ms = 0
+[sensor]
+fixed_pattern = "fp.yml.gz"
 [log]
 level = "debug"
 )",
                                 "/etc/naneye");
+  EXPECT_EQ(s.processor.fixed_pattern, std::filesystem::path("/etc/naneye/fp.yml.gz"));
   EXPECT_EQ(s.source_uri, "file:///x.raw?speed=max");
   EXPECT_EQ(s.sample_capture, std::filesystem::path("/etc/data/sample.raw"));
   ASSERT_EQ(s.calibration.size(), 2u);

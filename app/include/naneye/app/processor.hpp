@@ -2,6 +2,7 @@
 // The per-pair processing step naneyed's worker and `naneye recon` run. The product's step
 // (detect -> undistort -> triangulate -> board pose -> metrics, and the textured scene) is assembled
 // from recon/ here; the daemon's pipeline only depends on the PairProcessor interface.
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -36,6 +37,9 @@ struct ProcessorSettings {
   // tracking; [pipeline] corner_sigma_px (reconstruction.corner_sigma_px).
   recon::StereoReconstructorSettings reconstructor;
   recon::scene::SparseSettings sparse;
+  // [sensor] fixed_pattern: the file `naneye fixed-pattern` wrote; its maps are removed from both
+  // frames before the board and the scene read them (docs/sensor-calibration.md). Empty: none.
+  std::filesystem::path fixed_pattern;
 
   // Empty when usable, otherwise what is wrong, naming naneyed's key ("board.rows: ...").
   std::string check() const;
@@ -71,7 +75,8 @@ class PairProcessor {
 };
 
 // The processing step naneyed and `naneye recon` run: recon::StereoReconstructor on both raw frames
-// and, per `settings.mode`, the scene.
+// and, per `settings.mode`, the scene. Loads settings.fixed_pattern: std::runtime_error naming the
+// file when it cannot be used.
 std::unique_ptr<PairProcessor> make_processor(const ProcessorSettings& settings);
 
 // A driver frame as the recon module sees it (no copy).

@@ -30,6 +30,9 @@ struct FixedPatternSettings {
   double min_flat_signal_dn = 100.0;
   double saturation_margin_dn = 60.0;
   double white_dn = 1023.0;  // the 10-bit scale's top (driver::kPixelMax)
+  // DN: the dark map's robust spread above which the "dark" frames saw light (a capped NanEye's
+  // DSNU is 3.5-4 DN; a lit scene's texture spreads tens to hundreds): refused, not stored.
+  double max_dark_spread_dn = 20.0;
   // Gains outside this range are defects, not PRNU: left at 1 for the defect test downstream
   // (raw_to_luminance) to find, rather than scaled into plausible values.
   double min_gain = 0.5, max_gain = 2.0;
