@@ -4,7 +4,7 @@
 // stated sigma, the noise-free render's error (the method's misfit: resampling, the window model)
 // against the same sigma, and the plain rms(err / sigma) the tests hold to 0.7-1.4.
 //   build/bench/bench_dense_sigma [--seeds K] [--real-sensor] [--no-fpn] [--max-radius R] [--max-sigma S]
-//                                 [--pattern dsnu|prnu|as-read-noise]
+//                                 [--pattern dsnu|prnu|as-read-noise] [--fixed-pattern N]
 // --real-sensor: the real NanEye's measured noise, blur and fixed patterns (SensorSettings::measured),
 // where the matcher widens its window (the r column: the radius the last noisy render was matched with).
 // --no-fpn: without the fixed pattern (column FPN, DSNU, PRNU), to tell its share of the misfit.
@@ -13,6 +13,8 @@
 // --pattern dsnu | prnu | as-read-noise: with --real-sensor, only the DSNU or only the PRNU of the
 // fixed pattern, or none of it but the DSNU's variance added to the read noise (temporal): does a
 // fixed pattern hurt the sigma more than temporal noise of the same variance?
+// --fixed-pattern N: the die's fixed pattern measured from N capped and N flat frames and removed
+// from every render first, as naneyed's [sensor] fixed_pattern does (docs/sensor-calibration.md).
 // An honest sigma gives rms(spread / sigma) ~ 1; the misfit is not noise and is not in the sigma.
 // p68, tail and core/s tell a sigma too small for every pixel from one right for most but with a few
 // gross errors: the 68.27 % quantile of |err / sigma| (1 for a Gaussian), the share beyond 4 sigma,
@@ -30,6 +32,7 @@
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
+#include "naneye/sim/flat_field.hpp"
 #include "naneye/sim/textured.hpp"
 
 using namespace naneye;
@@ -48,7 +51,7 @@ struct Case {
 };
 
 void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor, bool no_fpn,
-         const std::string& pattern, const recon::scene::DenseSettings& ds) {
+         const std::string& pattern, int pattern_frames, const recon::scene::DenseSettings& ds) {
   sim::SensorSettings sensor = real_sensor ? sim::SensorSettings::measured(c.bayer) : sim::SensorSettings{};
   if (no_fpn) sensor.column_fpn_dn = sensor.dsnu_dn = sensor.prnu = 0;
   if (pattern == "dsnu") sensor.prnu = sensor.column_fpn_dn = 0;
@@ -61,6 +64,12 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
   sensor.white_dn = c.white_dn;
   sim::TexturedSceneSettings scene = *sim::textured_preset(c.preset);
   scene.texture.contrast *= c.contrast_factor;
+  // --fixed-pattern N: measured from N capped and N flat frames of the same die, removed from every
+  // render (docs/sensor-calibration.md).
+  const recon::StereoFixedPattern fixed =
+      pattern_frames > 0 ? sim::measure_fixed_pattern(sensor, pattern_frames, 0.7, 0xF1A7)
+                         : recon::StereoFixedPattern{};
+  std::vector<std::uint16_t> fixed_left, fixed_right;
   recon::scene::SparseReconstructor luma(rig);
   recon::scene::DenseReconstructor dense(rig, ds);
   recon::scene::DepthMap map;
@@ -73,7 +82,17 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
     const sim::TexturedRenderer renderer(rig, s);
     sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
     const sim::TexturedPair p = renderer.render(scene, rng);
-    luma.load_luma(sim::raw_view(p.left, c.bayer), sim::raw_view(p.right, c.bayer));
+    recon::RawImageView lv = sim::raw_view(p.left, c.bayer), rv = sim::raw_view(p.right, c.bayer);
+    if (!fixed.left.empty()) {
+      fixed_left.resize(p.left.total());
+      fixed_right.resize(p.right.total());
+      recon::remove_fixed_pattern(fixed.left, lv, fixed_left.data());
+      recon::remove_fixed_pattern(fixed.right, rv, fixed_right.data());
+      lv.data = fixed_left.data();
+      rv.data = fixed_right.data();
+      lv.stride = rv.stride = lv.width;
+    }
+    luma.load_luma(lv, rv);
     dense.reconstruct(luma.luma(), map);
     if (k < seeds) radius = dense.matcher().radius_used();
     if (!tally) tally.emplace(static_cast<std::size_t>(map.width) * map.height, seeds);
@@ -105,6 +124,7 @@ int main(int argc, char** argv) {
   int seeds = 8;
   bool real_sensor = false, no_fpn = false;
   std::string pattern = "all";
+  int pattern_frames = 0;
   recon::scene::DenseSettings ds;
   for (int a = 1; a < argc; ++a) {
     if (a + 1 < argc && std::strcmp(argv[a], "--seeds") == 0) seeds = std::max(2, std::atoi(argv[a + 1]));
@@ -115,6 +135,7 @@ int main(int argc, char** argv) {
     if (a + 1 < argc && std::strcmp(argv[a], "--max-sigma") == 0)
       ds.matcher.max_sigma_px = std::atof(argv[a + 1]);
     if (a + 1 < argc && std::strcmp(argv[a], "--pattern") == 0) pattern = argv[a + 1];
+    if (a + 1 < argc && std::strcmp(argv[a], "--fixed-pattern") == 0) pattern_frames = std::atoi(argv[a + 1]);
   }
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
@@ -130,6 +151,6 @@ int main(int argc, char** argv) {
       {"plane", "plane", true, 760, 1},
       {"sphere", "sphere", true, 760, 1},
   };
-  for (const Case& c : cases) run(rig, c, seeds, real_sensor, no_fpn, pattern, ds);
+  for (const Case& c : cases) run(rig, c, seeds, real_sensor, no_fpn, pattern, pattern_frames, ds);
   return 0;
 }

@@ -109,10 +109,14 @@ struct Tally {
   }
 };
 
+// The OpenCV path's 8-bit image: the 10-bit scale to 8 bits, the same for both eyes, as a user
+// dropping the two low bits gets it. Until 2026-12-06 this stretched each image min-max: the eyes'
+// defect pixels (hot 1023, dead 0, stuck 512) set the stretch, so the two eyes differed in scale
+// and LK in brightness; that path lost 2-3x the outliers it loses here (docs/scene.md).
 cv::Mat to8(const std::vector<float>& luma) {
   const cv::Mat f(250, 250, CV_32FC1, const_cast<float*>(luma.data()));
   cv::Mat out;
-  cv::normalize(f, out, 0, 255, cv::NORM_MINMAX, CV_8U);
+  f.convertTo(out, CV_8U, 255.0 / 1023.0);
   return out;
 }
 
