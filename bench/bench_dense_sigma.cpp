@@ -83,15 +83,7 @@ void run(const recon::StereoRig& rig, const Case& c, int seeds, bool real_sensor
     sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
     const sim::TexturedPair p = renderer.render(scene, rng);
     recon::RawImageView lv = sim::raw_view(p.left, c.bayer), rv = sim::raw_view(p.right, c.bayer);
-    if (!fixed.left.empty()) {
-      fixed_left.resize(p.left.total());
-      fixed_right.resize(p.right.total());
-      recon::remove_fixed_pattern(fixed.left, lv, fixed_left.data());
-      recon::remove_fixed_pattern(fixed.right, rv, fixed_right.data());
-      lv.data = fixed_left.data();
-      rv.data = fixed_right.data();
-      lv.stride = rv.stride = lv.width;
-    }
+    sim::remove_fixed_pattern(fixed, lv, rv, fixed_left, fixed_right);
     luma.load_luma(lv, rv);
     dense.reconstruct(luma.luma(), map);
     if (k < seeds) radius = dense.matcher().radius_used();

@@ -402,16 +402,7 @@ int main(int argc, char** argv) {
     for (int s = 0; s < seeds; ++s) {
       const sim::TexturedPair p = sim::numbered_render(renderer, name, s);
       auto lv = sim::raw_view(p.left, bayer), rv = sim::raw_view(p.right, bayer);
-      if (!pattern.left.empty()) {
-        fixed_left.resize(p.left.total());
-        fixed_right.resize(p.right.total());
-        recon::remove_fixed_pattern(pattern.left, lv, fixed_left.data());
-        recon::remove_fixed_pattern(pattern.right, rv, fixed_right.data());
-        lv.data = fixed_left.data();
-        rv.data = fixed_right.data();
-        lv.stride = lv.width;
-        rv.stride = rv.width;
-      }
+      sim::remove_fixed_pattern(pattern, lv, rv, fixed_left, fixed_right);
       for (int k = 0; k < repeat; ++k) {
         const double t0 = thread_cpu_s();
         ours.reconstruct(lv, rv, res);

@@ -74,29 +74,26 @@ void FixedPatternBuilder::check_shape(const RawImageView& f) {
     throw std::invalid_argument("fixed pattern: frames of another size or pixel layout than the first");
 }
 
-void FixedPatternBuilder::add_dark(const RawImageView& f) {
+void FixedPatternBuilder::accumulate(const RawImageView& f, std::vector<double>& sum,
+                                     std::vector<double>& sq) {
   check_shape(f);
   for (int r = 0; r < height_; ++r)
     for (int c = 0; c < width_; ++c) {
       const double v = f.data[static_cast<std::size_t>(r) * static_cast<std::size_t>(f.stride) +
                               static_cast<std::size_t>(c)];
       const auto k = static_cast<std::size_t>(r * width_ + c);
-      dark_sum_[k] += v;
-      dark_sq_[k] += v * v;
+      sum[k] += v;
+      sq[k] += v * v;
     }
+}
+
+void FixedPatternBuilder::add_dark(const RawImageView& f) {
+  accumulate(f, dark_sum_, dark_sq_);
   ++dark_n_;
 }
 
 void FixedPatternBuilder::add_flat(const RawImageView& f) {
-  check_shape(f);
-  for (int r = 0; r < height_; ++r)
-    for (int c = 0; c < width_; ++c) {
-      const double v = f.data[static_cast<std::size_t>(r) * static_cast<std::size_t>(f.stride) +
-                              static_cast<std::size_t>(c)];
-      const auto k = static_cast<std::size_t>(r * width_ + c);
-      flat_sum_[k] += v;
-      flat_sq_[k] += v * v;
-    }
+  accumulate(f, flat_sum_, flat_sq_);
   ++flat_n_;
 }
 

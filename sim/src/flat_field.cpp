@@ -1,5 +1,7 @@
 #include "naneye/sim/flat_field.hpp"
 
+#include <tuple>
+
 #include "naneye/driver/wire_format.hpp"
 #include "naneye/sim/render.hpp"
 
@@ -43,6 +45,19 @@ recon::StereoFixedPattern measure_fixed_pattern(const SensorSettings& sensor, in
     (eye == 0 ? out.left : out.right) = b.build();
   }
   return out;
+}
+
+void remove_fixed_pattern(const recon::StereoFixedPattern& pattern, recon::RawImageView& left,
+                          recon::RawImageView& right, std::vector<std::uint16_t>& left_buffer,
+                          std::vector<std::uint16_t>& right_buffer) {
+  if (pattern.left.empty()) return;
+  for (auto [view, p, buffer] : {std::tuple{&left, &pattern.left, &left_buffer},
+                                 std::tuple{&right, &pattern.right, &right_buffer}}) {
+    buffer->resize(static_cast<std::size_t>(view->width) * static_cast<std::size_t>(view->height));
+    recon::remove_fixed_pattern(*p, *view, buffer->data());
+    view->data = buffer->data();
+    view->stride = view->width;
+  }
 }
 
 }  // namespace naneye::sim

@@ -193,30 +193,19 @@ TEST(FixedPattern, RefusesWhatItCannotMeasure) {
     }
   };
   expect_refusal([&] { measure(die, 8); }, "dark frames, need at least 16");
-  expect_refusal(
-      [&] {
-        recon::FixedPatternBuilder b;
-        for (int i = 0; i < 16; ++i) {
-          const auto d = die.frame([](int, int) { return 0.0; });
-          b.add_dark(die.view(d));
-          const auto f = die.frame([](int, int) { return 40.0; });
-          b.add_flat(die.view(f));
-        }
-        b.build();
-      },
-      "more light");
-  expect_refusal(
-      [&] {
-        recon::FixedPatternBuilder b;
-        for (int i = 0; i < 16; ++i) {
-          const auto d = die.frame([](int, int) { return 0.0; });
-          b.add_dark(die.view(d));
-          const auto f = die.frame([](int, int) { return 990.0; });
-          b.add_flat(die.view(f));
-        }
-        b.build();
-      },
-      "less light");
+  // Flats of a uniform light `dn` above dark: 40 DN is too dim, 990 too near the top.
+  auto flats_at = [&](double dn) {
+    recon::FixedPatternBuilder b;
+    for (int i = 0; i < 16; ++i) {
+      const auto d = die.frame([](int, int) { return 0.0; });
+      b.add_dark(die.view(d));
+      const auto f = die.frame([dn](int, int) { return dn; });
+      b.add_flat(die.view(f));
+    }
+    b.build();
+  };
+  expect_refusal([&] { flats_at(40.0); }, "more light");
+  expect_refusal([&] { flats_at(990.0); }, "less light");
   expect_refusal(
       [&] {
         recon::FixedPatternBuilder b;

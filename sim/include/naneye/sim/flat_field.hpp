@@ -5,6 +5,7 @@
 // angle, the light a factor ~0.6 dimmer at the corners).
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "naneye/recon/camera/fixed_pattern_io.hpp"
 #include "naneye/sim/sensor_model.hpp"
@@ -19,5 +20,11 @@ void expose_calibration_frame(const SensorModel& model, int eye, double level, R
 recon::StereoFixedPattern measure_fixed_pattern(const SensorSettings& sensor, int frames, double level,
                                                 std::uint64_t seed,
                                                 const recon::FixedPatternSettings& settings = {});
+
+// Both views pointed at copies with the pattern removed (buffers sized on first use); left as they
+// are when `pattern` is empty. For the benches and tests; naneyed's step is app::FixedPatternStep.
+void remove_fixed_pattern(const recon::StereoFixedPattern& pattern, recon::RawImageView& left,
+                          recon::RawImageView& right, std::vector<std::uint16_t>& left_buffer,
+                          std::vector<std::uint16_t>& right_buffer);
 
 }  // namespace naneye::sim

@@ -73,6 +73,7 @@ class FixedPatternBuilder {
 
  private:
   void check_shape(const RawImageView& frame);
+  void accumulate(const RawImageView& frame, std::vector<double>& sum, std::vector<double>& sq);
   FixedPatternSettings s_;
   int width_ = 0, height_ = 0, ignore_cols_ = 0, ignore_rows_ = 0;
   PixelLayout layout_ = PixelLayout::mono;
