@@ -67,9 +67,7 @@ void print_eye(const char* name, const recon::FixedPattern& p) {
 }
 
 void run(const FixedPatternOptions& o) {
-  recon::FixedPatternSettings settings;
-  settings.min_dark_frames = settings.min_flat_frames = std::min(16, o.frames);
-  recon::FixedPatternBuilder left(settings), right(settings);
+  recon::FixedPatternBuilder left, right;
   collect(o.dark, o.frames, true, left, right);
   if (!o.flat.empty()) collect(o.flat, o.frames, false, left, right);
   const recon::StereoFixedPattern pattern{left.build(), right.build()};
@@ -103,9 +101,12 @@ void add_fixed_pattern_commands(CLI::App& app) {
   cmd->add_option("--flat", o->flat,
                   "Source URI or capture of a uniform white target filling the view (not saturated); "
                   "without it, offsets only");
-  cmd->add_option("--frames", o->frames, "Pairs averaged from each source")
+  const int min_frames = recon::FixedPatternSettings{}.min_dark_frames;
+  cmd->add_option("--frames", o->frames,
+                  "Pairs averaged from each source (at least " + std::to_string(min_frames) +
+                      ": fewer add more noise than they remove)")
       ->capture_default_str()
-      ->check(CLI::Range(2, 100000));
+      ->check(CLI::Range(min_frames, 100000));
   cmd->add_option("-o,--output", o->output, "The fixed-pattern file to write (.yml.gz or .yml)")->required();
   cmd->callback([o] { run(*o); });
 }

@@ -80,6 +80,10 @@ TEST_F(FixedPatternCli, RefusesWithNothingWritten) {
   test::CliResult r = test::run_cli("fixed-pattern --dark " + lit + " --frames 16 -o " + out.string(), true);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.out.find("saw light"), std::string::npos) << r.out;
+  // Fewer frames than the maps need.
+  r = test::run_cli("fixed-pattern --dark " + dark + " --frames 8 -o " + out.string(), true);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.out.find("--frames: Value 8 not in range 16 to 100000"), std::string::npos) << r.out;
   // Fewer pairs in the source than --frames asks for.
   r = test::run_cli("fixed-pattern --dark " + dark + " --frames 40 -o " + out.string(), true);
   EXPECT_NE(r.exit_code, 0);
