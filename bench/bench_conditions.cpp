@@ -5,10 +5,13 @@
 // condition: pairs found (both eyes), corners farther than 0.5 px from every true corner (false
 // corners), corner RMS and worst corner against the simulator's truth, and our failure reasons.
 // One pass per condition (a table of figures, not a timing: CPU per eye is printed for reference).
+// --fixed-pattern N: the sensor's fixed pattern measured and removed first (docs/sensor-calibration.md).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <map>
 #include <string>
@@ -16,6 +19,7 @@
 #include "../tests/corners/corner_test_util.hpp"
 #include "../tests/corners/imaging_conditions.hpp"
 #include "naneye/recon/pair/opencv_path.hpp"
+#include "naneye/sim/flat_field.hpp"
 
 namespace {
 
@@ -58,6 +62,11 @@ double cpu_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+// --fixed-pattern N: each condition's die measured from N capped and N flat frames (a flat lit to
+// ~500 DN whatever the condition's exposure: the user lights the target for it) and removed from every render
+// before both detectors (docs/sensor-calibration.md).
+int g_pattern_frames = 0;
+
 void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, bool board) {
   const recon::StereoRig& rig = test::paper_d3();
   sim::SceneSettings scene = cond.scene;
@@ -65,6 +74,11 @@ void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, b
   const sim::Renderer renderer(rig, scene, cond.sensor);
   const bool bayer = cond.sensor.bayer;
   recon::CornerDetector left(rig.left), right(rig.right);
+  const recon::StereoFixedPattern pattern =
+      g_pattern_frames > 0 ? sim::measure_fixed_pattern(cond.sensor, g_pattern_frames,
+                                                        std::min(0.9, 500.0 / cond.sensor.white_dn), 0xF1A7)
+                           : recon::StereoFixedPattern{};
+  std::vector<std::uint16_t> fixed_left, fixed_right;
   Row row;
   int eyes = 0;
   for (auto _ : state) {
@@ -75,11 +89,13 @@ void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, b
       const sim::RenderedPair p = renderer.render(pose, rng);
       const bool in_view = board && p.truth.board_in_view;
       row.in_view += in_view;
+      recon::RawImageView lv = sim::raw_view(p.left, bayer), rv = sim::raw_view(p.right, bayer);
+      sim::remove_fixed_pattern(pattern, lv, rv, fixed_left, fixed_right);
       recon::CornerResult rl, rr;
       const double t0 = cpu_seconds();
-      const bool fl = left.detect_full(sim::raw_view(p.left, bayer), rl);
+      const bool fl = left.detect_full(lv, rl);
       const recon::CornerFailure why_l = left.last_failure();
-      const bool fr = right.detect_full(sim::raw_view(p.right, bayer), rr);
+      const bool fr = right.detect_full(rv, rr);
       row.cpu_ms += 1e3 * (cpu_seconds() - t0);
       eyes += 2;
       const recon::CornerFailure why_r = right.last_failure();
@@ -102,8 +118,7 @@ void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, b
       for (int i = 0; i < rl.count; ++i) row.e_ours.add(rl.corners[static_cast<std::size_t>(i)].px, tl);
       for (int i = 0; i < rr.count; ++i) row.e_ours.add(rr.corners[static_cast<std::size_t>(i)].px, tr);
       row.ours += in_view && fl && fr;
-      const recon::OpenCvPathResult cv =
-          recon::opencv_reconstruct_pair(rig, sim::raw_view(p.left, bayer), sim::raw_view(p.right, bayer));
+      const recon::OpenCvPathResult cv = recon::opencv_reconstruct_pair(rig, lv, rv);
       row.opencv += in_view && cv.found;
       for (const auto& q : cv.left_px) row.e_cv.add({q.x, q.y}, tl);
       for (const auto& q : cv.right_px) row.e_cv.add({q.x, q.y}, tr);
@@ -119,6 +134,8 @@ void BM_Condition(benchmark::State& state, const test::ImagingCondition& cond, b
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::string(argv[i]) == "--fixed-pattern") g_pattern_frames = std::atoi(argv[i + 1]);
   const auto conds = test::imaging_conditions();
   for (const auto& c : conds) {
     benchmark::RegisterBenchmark(("BM_Condition/" + c.name).c_str(), BM_Condition, c, true)
