@@ -11,6 +11,7 @@
 #include "naneye/base/clock.hpp"
 #include "naneye/base/enum_table.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
+#include "naneye/sim/flat_field.hpp"
 #include "naneye/sim/stream.hpp"
 
 namespace naneye::sim {
@@ -45,13 +46,24 @@ bool flag(const driver::SourceUri& uri, const char* name, bool fallback) {
 
 SimSourceSettings parse_sim_uri(const driver::SourceUri& uri) {
   uri.allow_only({"fps", "motion", "seed", "bayer", "noise", "pairs", "speed", "color", "tolerance_ms",
-                  "reference", "supersample"});
+                  "reference", "supersample", "sensor"});
   SimSourceSettings o;
   o.preset = uri.target.empty() ? "paper-d3" : uri.target;
   o.textured = textured_preset(o.preset).has_value();
-  if (!o.textured && !find_preset(o.preset))
-    throw driver::SourceError("sim: unknown preset '" + o.preset +
-                              "' (paper-d1, paper-d2, paper-d3; plane, plane-far, sphere, tube, height)");
+  // The flat's light: 0.7 of white, ~530 DN at the default exposure, clear of saturation.
+  if (o.preset == "dark" || o.preset == "flat") o.calibration_light = o.preset == "dark" ? 0.0 : 0.7;
+  if (!o.textured && o.calibration_light < 0 && !find_preset(o.preset))
+    throw driver::SourceError(
+        "sim: unknown preset '" + o.preset +
+        "' (paper-d1, paper-d2, paper-d3; plane, plane-far, sphere, tube, height; dark, flat)");
+  if (const auto v = uri.param("sensor")) {
+    if (*v != "default" && *v != "measured")
+      throw driver::SourceError("sim: sensor=" + *v + " (default, measured)");
+    o.measured_sensor = *v == "measured";
+  }
+  if (o.calibration_light >= 0 && uri.param("motion"))
+    throw driver::SourceError("sim: " + o.preset +
+                              " frames have no motion (the lens capped or the target filling it)");
   // A textured scene's default rate is what its renderer holds in real time (sim_source.hpp).
   o.fps = o.textured ? number(uri, "fps", 10.0, 1.0, 62.0) : number(uri, "fps", 50.0, 43.0, 62.0);
   o.motion = o.textured ? Motion::handheld : Motion::orbit;
@@ -72,6 +84,8 @@ SimSourceSettings parse_sim_uri(const driver::SourceUri& uri) {
   o.seed = number<std::uint64_t>(uri, "seed", 1, 0, UINT64_MAX);
   o.bayer = flag(uri, "bayer", false);
   o.noise = flag(uri, "noise", true);
+  if (o.measured_sensor && !o.noise)
+    throw driver::SourceError("sim: sensor=measured has noise: noise=0 is the ideal sensor");
   o.pairs = number<std::uint64_t>(uri, "pairs", 0, 0, UINT64_MAX);
   if (const auto s = uri.param("speed")) {
     if (*s != "realtime" && *s != "max") throw driver::SourceError("sim: speed=" + *s + " (realtime, max)");
@@ -133,9 +147,11 @@ void SimSource::open() {
     } catch (const std::exception& e) {
       throw driver::SourceError(std::string("sim: ") + e.what());
     }
-    SensorSettings sensor = options_.noise ? SensorSettings{} : SensorSettings::ideal();
-    sensor.bayer = options_.bayer;
-    textured_ = std::make_unique<TexturedRenderer>(rig, sensor, options_.supersample);
+    textured_ = std::make_unique<TexturedRenderer>(rig, sensor_settings(), options_.supersample);
+    return;
+  }
+  if (options_.calibration_light >= 0) {
+    calibration_ = std::make_unique<SensorModel>(sensor_settings());
     return;
   }
   const Preset preset = *find_preset(options_.preset);
@@ -146,79 +162,75 @@ void SimSource::open() {
     throw driver::SourceError(std::string("sim: ") + e.what());
   }
   SceneSettings scene = preset_scene(preset);
-  SensorSettings sensor = options_.noise ? SensorSettings{} : SensorSettings::ideal();
   if (!options_.noise) scene.lighting = false;
-  sensor.bayer = options_.bayer;
-  renderer_ = std::make_unique<Renderer>(rig, scene, sensor);
+  renderer_ = std::make_unique<Renderer>(rig, scene, sensor_settings());
+}
+
+SensorSettings SimSource::sensor_settings() const {
+  SensorSettings s = options_.measured_sensor ? SensorSettings::measured(options_.bayer)
+                                              : (options_.noise ? SensorSettings{} : SensorSettings::ideal());
+  s.bayer = options_.bayer;
+  return s;
 }
 
 void SimSource::run() {
-  if (options_.textured) return run_textured();
-  const Preset preset = *find_preset(options_.preset);
   Rng rng(options_.seed);
   TimingSettings timing;
   timing.fps_start = options_.fps;
+  if (options_.calibration_light >= 0) {
+    log()->info("sim://{}: {} fps, calibration frames", options_.preset, options_.fps);
+    SensorModel::Scratch scratch;
+    cv::Mat frame;
+    return stream(timing, rng, [&](Rng& r, double, std::uint16_t* left, std::uint16_t* right) {
+      for (int eye = 0; eye < 2; ++eye) {
+        expose_calibration_frame(*calibration_, eye, options_.calibration_light, r, scratch, frame);
+        std::copy_n(frame.ptr<std::uint16_t>(), driver::kPixelCount, eye == 0 ? left : right);
+      }
+    });
+  }
+  if (options_.textured) {
+    const TexturedSceneSettings scene = *textured_preset(options_.preset);
+    // The simulated sensors run at the chosen rate (sim_source.hpp: below 43 fps for textured scenes).
+    timing.fps_min = std::min(timing.fps_min, options_.fps);
+    timing.fps_max = std::max(options_.fps, std::min(timing.fps_max, options_.fps * 1.2));
+    timing.fps_step = std::min(timing.fps_step, 0.005 * options_.fps);
+    log()->info("sim://{}: textured scene, {} fps, camera {}", options_.preset, options_.fps,
+                options_.motion == Motion::handheld ? "hand-held" : "still");
+    cv::Mat l, r;
+    return stream(timing, rng, [&](Rng& g, double t, std::uint16_t* left, std::uint16_t* right) {
+      Pose camera;  // still: where the preset puts it
+      camera.t.setZero();
+      // The scale of the motion: the preset's own reference distance (10-55 mm).
+      if (options_.motion == Motion::handheld) camera = handheld_camera_pose(scene.light_reference_mm, t);
+      textured_->render_frames(seen_from(scene, camera), g, l, r);
+      std::copy_n(l.ptr<std::uint16_t>(), driver::kPixelCount, left);
+      std::copy_n(r.ptr<std::uint16_t>(), driver::kPixelCount, right);
+    });
+  }
+  const Preset preset = *find_preset(options_.preset);
+  Renderer::Scratch scratch;
+  log()->info("sim://{}: {} fps, rendering", options_.preset, options_.fps);
+  stream(timing, rng, [&](Rng& g, double t, std::uint16_t* left, std::uint16_t* right) {
+    renderer_->render_into(trajectory_pose(options_.motion, renderer_->scene().board, preset.distance_mm, t),
+                           g, left, right, scratch);
+  });
+}
+
+void SimSource::stream(const TimingSettings& timing, Rng& rng, const RenderPair& render) {
   const std::uint64_t start_ticks = rng() % (std::uint64_t{1} << 32);
   FrameClock clock(timing, start_ticks, rng);
   RecordWriter writer(
       [this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, base::monotonic_ns()); }, {}, 0,
       static_cast<std::uint8_t>(rng()));
   std::vector<std::uint16_t> left(driver::kPixelCount), right(driver::kPixelCount);
-  Renderer::Scratch scratch;
-  const auto t0 = std::chrono::steady_clock::now();
-  log()->info("sim://{}: {} fps, rendering", options_.preset, options_.fps);
-  for (std::uint64_t i = 0; options_.pairs == 0 || i < options_.pairs; ++i) {
-    if (stopping()) return;
-    const PairTime pt = clock.next(rng);
-    const double t = static_cast<double>(pt.left_ticks - start_ticks) / driver::kTickHz;
-    renderer_->render_into(trajectory_pose(options_.motion, renderer_->scene().board, preset.distance_mm, t),
-                           rng, left.data(), right.data(), scratch);
-    // A record is complete when its frame has been read out: pace each to its sensor time.
-    for (int eye = 0; eye < 2; ++eye) {
-      const std::uint64_t ticks = eye == 0 ? pt.left_ticks : pt.right_ticks;
-      if (options_.realtime) {
-        const auto due = t0 + std::chrono::nanoseconds(static_cast<std::int64_t>(
-                                  static_cast<double>(ticks - start_ticks) * 1e9 / driver::kTickHz));
-        if (!sleep_until(due)) return;
-      }
-      writer.write(eye == 0 ? driver::Sensor::left : driver::Sensor::right, static_cast<std::uint32_t>(ticks),
-                   std::span<const std::uint16_t, driver::kPixelCount>((eye == 0 ? left : right).data(),
-                                                                       driver::kPixelCount),
-                   0);
-      writer.finish();  // hand the record over now: a live source never holds one back
-    }
-  }
-  end_of_stream(base::monotonic_ns());
-}
-
-void SimSource::run_textured() {
-  const TexturedSceneSettings scene = *textured_preset(options_.preset);
-  Rng rng(options_.seed);
-  TimingSettings timing;
-  // The simulated sensors run at the chosen rate (sim_source.hpp: below 43 fps for textured scenes).
-  timing.fps_start = options_.fps;
-  timing.fps_min = std::min(timing.fps_min, options_.fps);
-  timing.fps_max = std::max(options_.fps, std::min(timing.fps_max, options_.fps * 1.2));
-  timing.fps_step = std::min(timing.fps_step, 0.005 * options_.fps);
-  const std::uint64_t start_ticks = rng() % (std::uint64_t{1} << 32);
-  FrameClock clock(timing, start_ticks, rng);
-  RecordWriter writer(
-      [this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, base::monotonic_ns()); }, {}, 0,
-      static_cast<std::uint8_t>(rng()));
-  cv::Mat left, right;
   const auto t0 = std::chrono::steady_clock::now();
   std::uint64_t late = 0;
-  log()->info("sim://{}: textured scene, {} fps, camera {}", options_.preset, options_.fps,
-              options_.motion == Motion::handheld ? "hand-held" : "still");
   for (std::uint64_t i = 0; options_.pairs == 0 || i < options_.pairs; ++i) {
     if (stopping()) return;
     const PairTime pt = clock.next(rng);
-    const double t = static_cast<double>(pt.left_ticks - start_ticks) / driver::kTickHz;
-    Pose camera;  // still: where the preset puts it
-    camera.t.setZero();
-    // The scale of the motion: the preset's own reference distance (10-55 mm).
-    if (options_.motion == Motion::handheld) camera = handheld_camera_pose(scene.light_reference_mm, t);
-    textured_->render_frames(seen_from(scene, camera), rng, left, right);
+    render(rng, static_cast<double>(pt.left_ticks - start_ticks) / driver::kTickHz, left.data(),
+           right.data());
+    // A record is complete when its frame has been read out: pace each to its sensor time.
     for (int eye = 0; eye < 2; ++eye) {
       const std::uint64_t ticks = eye == 0 ? pt.left_ticks : pt.right_ticks;
       if (options_.realtime) {
@@ -229,12 +241,11 @@ void SimSource::run_textured() {
                       options_.preset, options_.fps);
         if (!sleep_until(due)) return;
       }
-      const cv::Mat& m = eye == 0 ? left : right;
-      writer.write(
-          eye == 0 ? driver::Sensor::left : driver::Sensor::right, static_cast<std::uint32_t>(ticks),
-          std::span<const std::uint16_t, driver::kPixelCount>(m.ptr<std::uint16_t>(), driver::kPixelCount),
-          0);
-      writer.finish();
+      writer.write(eye == 0 ? driver::Sensor::left : driver::Sensor::right, static_cast<std::uint32_t>(ticks),
+                   std::span<const std::uint16_t, driver::kPixelCount>((eye == 0 ? left : right).data(),
+                                                                       driver::kPixelCount),
+                   0);
+      writer.finish();  // hand the record over now: a live source never holds one back
     }
   }
   end_of_stream(base::monotonic_ns());

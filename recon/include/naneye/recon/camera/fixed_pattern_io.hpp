@@ -1,6 +1,6 @@
 #pragma once
 // Both eyes' fixed patterns in one file (docs/sensor-calibration.md): OpenCV FileStorage, so
-// `.yml.gz` compresses (~1 MB of maps to ~0.5 MB) and `.yml` stays readable.
+// `.yml.gz` compresses (4.6 MB of text to 1.1 MB for both eyes' maps) and `.yml` stays readable.
 #include <filesystem>
 
 #include "naneye/recon/camera/fixed_pattern.hpp"
