@@ -15,10 +15,14 @@
 namespace naneye::recon::scene {
 namespace {
 
-constexpr int kMaxN = 15 * 15;
+// The widest window refine_affine takes. It was 15 x 15 (radius 7) until 2026-12-06, and a
+// SparseSettings::wide_radius of 8 or more then gave the narrow window alone, silently.
+constexpr int kMaxSide = 2 * kMaxLkRadius + 1;
+constexpr int kMaxN = kMaxSide * kMaxSide;
 constexpr int kMaxN8 = lk_dots::padded(kMaxN);
-// The grown window's rows (side + 2 <= 17 columns) at a stride of whole 4-float vectors.
-constexpr int kMaxStride = 20, kMaxGrown8 = lk_dots::padded(17 * kMaxStride);
+// The grown window's rows (side + 2 columns) at a stride of whole 4-float vectors.
+constexpr int kMaxStride = (kMaxSide + 2 + 3) / 4 * 4,
+              kMaxGrown8 = lk_dots::padded((kMaxSide + 2) * kMaxStride);
 
 // sum_p (b * v)_p (b * v)_p^T over the window grown by one pixel (the kernel's reach) for the
 // 2-vectors v = (x, y) per pixel of the side x side window (zero outside it): the noise of a weighted
@@ -29,7 +33,7 @@ Eigen::Matrix2d kernel_outer(const std::array<float, 9>& b, const float* x, cons
   using simd::V4;
   const int g = side + 2, stride = (g + 3) / 4 * 4, in_stride = stride + 4;
   // The inputs at (2, 2) of zero planes of side + 4 rows: out(r, c) = sum b(i, j) in(r + i, c + j).
-  alignas(16) float pad[2][(17 + 2) * (kMaxStride + 4)] = {};
+  alignas(16) float pad[2][(kMaxSide + 4) * (kMaxStride + 4)] = {};
   for (int r = 0; r < side; ++r)
     for (int c = 0; c < side; ++c) {
       pad[0][(r + 2) * in_stride + c + 2] = x[r * side + c];

@@ -3,7 +3,7 @@
 // centre c, against itself and several others: sum (a - c)^2 and sum (a - c) b_j. 8 float partial
 // sums per output (one per k mod 8) reduced in double in lane order; the plain loop, SSE2 (two
 // 4-lane vectors) and AVX2 (one 8-lane vector, no fused multiply-add) add and multiply in that same
-// order, so all three give the same bits (LkDots.*). Float: a window of <= 225 products in 8 partial
+// order, so all three give the same bits (LkDots.*). Float: a window of <= 441 products in 8 partial
 // sums carries ~1e-6 relative error, far below what a Hessian or a Gauss-Newton step needs; the
 // centre keeps a window's variance from cancelling (lk_affine.cpp). They replaced double outer
 // products and sums: callgrind, the sparse path on the plane, 125.6 -> 107.4 M instructions per

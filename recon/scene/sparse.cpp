@@ -5,6 +5,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "naneye/base/enum_table.hpp"
 #include "naneye/recon/corners/noise.hpp"
@@ -95,6 +96,10 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
       s_(s),
       detector_(rig.left.width(), rig.left.height(), s.features),
       ids_(rig.left.width(), rig.left.height(), s.max_features, s.ids) {
+  if (s.lk.radius > kMaxLkRadius || s.wide_radius > kMaxLkRadius)
+    throw std::invalid_argument("sparse: lk.radius " + std::to_string(s.lk.radius) + " and wide_radius " +
+                                std::to_string(s.wide_radius) + " must be at most " +
+                                std::to_string(kMaxLkRadius) + " (the affine LK's widest window)");
   R_lr_ = rig_.R;
   T_lr_ = rig_.T;
   R_rl_ = rig_.R.transpose();

@@ -13,8 +13,11 @@
 
 namespace naneye::recon::scene {
 
+// px; the widest window refine_affine takes (21 x 21): a wider one is never converged.
+inline constexpr int kMaxLkRadius = 10;
+
 struct LkSettings {
-  int radius = 4;  // px; template window (2 radius + 1)^2
+  int radius = 4;  // px; template window (2 radius + 1)^2, at most kMaxLkRadius
   int max_iterations = 20;
   double stop_step_px = 5e-3;  // px; stop when the centre moves less than this
   double max_travel_px = 2.5;  // px; from the start: beyond, the coarse match was wrong

@@ -52,6 +52,7 @@ struct SparseSettings {
   // The wider LK window (docs/scene.md, "Sparse path" step 5), px: 13 x 13 against lk.radius's 9 x 9
   // (2.1x the pixels: ~0.7x the disparity sigma where the texture is even). Its match replaces the
   // narrow one only where the affine warp holds over it (sparse.cpp); 0 (or <= lk.radius): never.
+  // At most kMaxLkRadius (10); the reconstructor refuses more.
   int wide_radius = 6;
   // Each of the wider window's three tests (its outer ring's residual against the narrow window's
   // noise, its shift against the narrow one's, and that shift test pooled over the neighbourhood;
