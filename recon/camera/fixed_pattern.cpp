@@ -10,7 +10,7 @@ namespace {
 // The pixels the pipeline reads (RawImageView's contract): rows and columns it ignores are copied.
 struct Region {
   int r0, r1, c1;  // rows [r0, r1), columns [0, c1)
-  bool contains(int r, int c) const { return r >= r0 && r < r1 && c < c1; }
+  bool contains(int r, int c) const { return r >= r0 && r < r1 && c >= 0 && c < c1; }
 };
 
 Region used_region(const RawImageView& v) {
@@ -60,28 +60,25 @@ FixedPatternBuilder::FixedPatternBuilder(const FixedPatternSettings& s) : s_(s) 
 void FixedPatternBuilder::check_shape(const RawImageView& f) {
   if (!f.data || f.width <= 0 || f.height <= 0 || f.stride < f.width)
     throw std::invalid_argument("fixed pattern: empty frame");
-  if (width_ == 0) {
-    width_ = f.width;
-    height_ = f.height;
-    layout_ = f.layout;
-    ignore_cols_ = f.ignore_last_cols;
-    ignore_rows_ = f.ignore_edge_rows;
-    const auto n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  if (shape_.width == 0) {
+    shape_ = f;
+    shape_.data = nullptr;  // the first frame's geometry only
+    const auto n = static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height);
     for (auto* v : {&dark_sum_, &dark_sq_, &flat_sum_, &flat_sq_}) v->assign(n, 0.0);
     return;
   }
-  if (f.width != width_ || f.height != height_ || f.layout != layout_)
+  if (f.width != shape_.width || f.height != shape_.height || f.layout != shape_.layout)
     throw std::invalid_argument("fixed pattern: frames of another size or pixel layout than the first");
 }
 
 void FixedPatternBuilder::accumulate(const RawImageView& f, std::vector<double>& sum,
                                      std::vector<double>& sq) {
   check_shape(f);
-  for (int r = 0; r < height_; ++r)
-    for (int c = 0; c < width_; ++c) {
+  for (int r = 0; r < f.height; ++r)
+    for (int c = 0; c < f.width; ++c) {
       const double v = f.data[static_cast<std::size_t>(r) * static_cast<std::size_t>(f.stride) +
                               static_cast<std::size_t>(c)];
-      const auto k = static_cast<std::size_t>(r * width_ + c);
+      const auto k = static_cast<std::size_t>(r * f.width + c);
       sum[k] += v;
       sq[k] += v * v;
     }
@@ -104,23 +101,19 @@ FixedPattern FixedPatternBuilder::build() const {
   if (flat_n_ > 0 && flat_n_ < s_.min_flat_frames)
     throw std::invalid_argument("fixed pattern: " + std::to_string(flat_n_) + " flat frames, need at least " +
                                 std::to_string(s_.min_flat_frames) + " (or none: offsets only)");
-  RawImageView shape;
-  shape.width = width_;
-  shape.height = height_;
-  shape.ignore_last_cols = ignore_cols_;
-  shape.ignore_edge_rows = ignore_rows_;
-  const Region reg = used_region(shape);
-  const auto n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  const int w = shape_.width, h = shape_.height;
+  const Region reg = used_region(shape_);
+  const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   FixedPattern p;
-  p.width = width_;
-  p.height = height_;
+  p.width = w;
+  p.height = h;
   p.dark_frames = dark_n_;
   p.flat_frames = flat_n_;
   p.dark.resize(n);
   std::vector<double> used_dark, se2;
-  for (int r = 0; r < height_; ++r)
-    for (int c = 0; c < width_; ++c) {
-      const auto k = static_cast<std::size_t>(r * width_ + c);
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) {
+      const auto k = static_cast<std::size_t>(r * w + c);
       p.dark[k] = static_cast<float>(dark_sum_[k] / dark_n_);
       if (!reg.contains(r, c)) continue;
       used_dark.push_back(p.dark[k]);
@@ -143,7 +136,7 @@ FixedPattern FixedPatternBuilder::build() const {
   int saturated = 0;
   for (int r = reg.r0; r < reg.r1; ++r)
     for (int c = 0; c < reg.c1; ++c) {
-      const auto k = static_cast<std::size_t>(r * width_ + c);
+      const auto k = static_cast<std::size_t>(r * w + c);
       const double flat = flat_sum_[k] / flat_n_;
       signal[k] = flat - p.dark[k];
       used_signal.push_back(signal[k]);
@@ -163,7 +156,7 @@ FixedPattern FixedPatternBuilder::build() const {
   // Each pixel's gain against the median of its same-colour neighbours (the median: a defect
   // nearby must not move its neighbours' gains). Same colour = same row and column parity on a
   // Bayer mosaic, every pixel on a mono sensor.
-  const int step = layout_ == PixelLayout::bayer_grbg ? 2 : 1;
+  const int step = shape_.layout == PixelLayout::bayer_grbg ? 2 : 1;
   const int rad = s_.gain_radius_px;
   p.gain.assign(n, 1.0f);
   std::vector<double> neigh, used_gain, gain_se2;
@@ -175,14 +168,12 @@ FixedPattern FixedPatternBuilder::build() const {
           const int rr = r + dr, cc = c + dc;
           // Point-symmetric pairs only: at the border a one-sided window would read the shading's
           // slope as gain (0.2 % in the corners' 30 x 30 blocks), a symmetric one cancels it.
-          if ((dr == 0 && dc == 0) || !reg.contains(rr, cc) || cc < 0 || !reg.contains(r - dr, c - dc) ||
-              c - dc < 0)
-            continue;
-          neigh.push_back(signal[static_cast<std::size_t>(rr * width_ + cc)]);
+          if ((dr == 0 && dc == 0) || !reg.contains(rr, cc) || !reg.contains(r - dr, c - dc)) continue;
+          neigh.push_back(signal[static_cast<std::size_t>(rr * w + cc)]);
         }
       if (neigh.size() < 8) continue;  // the first and last used rows: no symmetric neighbourhood
       const double local = median_of(neigh);
-      const auto k = static_cast<std::size_t>(r * width_ + c);
+      const auto k = static_cast<std::size_t>(r * w + c);
       if (local <= 0) continue;
       const double g = signal[k] / local;
       if (g < s_.min_gain || g > s_.max_gain) continue;  // a defect: left to the defect test

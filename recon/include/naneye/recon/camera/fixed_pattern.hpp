@@ -75,8 +75,8 @@ class FixedPatternBuilder {
   void check_shape(const RawImageView& frame);
   void accumulate(const RawImageView& frame, std::vector<double>& sum, std::vector<double>& sq);
   FixedPatternSettings s_;
-  int width_ = 0, height_ = 0, ignore_cols_ = 0, ignore_rows_ = 0;
-  PixelLayout layout_ = PixelLayout::mono;
+  // The first frame's geometry (width 0 before it; no data): every later frame must match it.
+  RawImageView shape_{nullptr, 0, 0, 0};
   int dark_n_ = 0, flat_n_ = 0;
   std::vector<double> dark_sum_, dark_sq_, flat_sum_, flat_sq_;
 };
