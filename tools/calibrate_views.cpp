@@ -6,7 +6,6 @@
 
 #include <spdlog/spdlog.h>
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -15,6 +14,7 @@
 #include "naneye/app/processor.hpp"
 #include "naneye/app/sources.hpp"
 #include "naneye/recon/corners/stereo_ids.hpp"
+#include "source_pairs.hpp"
 
 namespace naneye::tools {
 
@@ -103,15 +103,10 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
       throw std::runtime_error(uri + ": cannot be read: " + e.what());
     }
     unsigned long long index = 0;
-    while (max_pairs <= 0 || static_cast<long long>(index) < max_pairs) {
-      driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
-      if (!pair) {
-        if (driver::has_ended(source->state())) break;
-        continue;
-      }
+    for_each_pair(*source, max_pairs <= 0 ? -1 : max_pairs, [&](driver::StereoPair& pair) {
       ++out.pairs;
-      const bool l = detect_left.detect_full(app::image_view(pair->left), left);
-      const bool r = detect_right.detect_full(app::image_view(pair->right), right);
+      const bool l = detect_left.detect_full(app::image_view(pair.left), left);
+      const bool r = detect_right.detect_full(app::image_view(pair.right), right);
       if (l || r) {
         recon::CalibrationView v;
         if (l) v.left = corners_of(left);
@@ -138,7 +133,7 @@ CollectedViews collect_views(const std::vector<std::string>& inputs, const recon
       progress.update((static_cast<double>(uris_done) + within) / static_cast<double>(uris.size()),
                       "detecting boards: " + std::to_string(out.pairs) + " pairs read, " +
                           std::to_string(out.views.size()) + " boards found");
-    }
+    });
     source->stop();
     if (auto err = source->error()) throw std::runtime_error(uri + ": cannot be read: " + *err);
     if (index == 0) throw std::runtime_error(uri + ": no stereo pair could be read");

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -16,6 +15,7 @@
 #include "commands.hpp"
 #include "naneye/app/sources.hpp"
 #include "naneye/driver/recorder.hpp"
+#include "source_pairs.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -112,27 +112,21 @@ void run_replay(const ReplayOptions& o) {
   double off_sum = 0;
   std::int64_t off_min = std::numeric_limits<std::int64_t>::max(),
                off_max = std::numeric_limits<std::int64_t>::min();
-  std::uint64_t pairs = 0, ref_bad = 0;
-  for (;;) {
-    driver::PairPtr p = source->next(std::chrono::milliseconds(500));
-    if (!p) {
-      if (driver::has_ended(source->state())) break;
-      continue;
-    }
-    ++pairs;
-    left.add(p->left.sensor_ns);
-    right.add(p->right.sensor_ns);
-    const std::int64_t off = p->offset_ns();
+  std::uint64_t ref_bad = 0;
+  const auto pairs = static_cast<std::uint64_t>(for_each_pair(*source, -1, [&](driver::StereoPair& pair) {
+    left.add(pair.left.sensor_ns);
+    right.add(pair.right.sensor_ns);
+    const std::int64_t off = pair.offset_ns();
     off_sum += static_cast<double>(off);
     off_min = std::min(off_min, off);
     off_max = std::max(off_max, off);
-    ref_bad += (p->left.reference == driver::ReferenceStatus::failed) +
-               (p->right.reference == driver::ReferenceStatus::failed);
+    ref_bad += (pair.left.reference == driver::ReferenceStatus::failed) +
+               (pair.right.reference == driver::ReferenceStatus::failed);
     if (!o.stats && !o.json)
-      std::cout << "pair " << p->index << "  left seq " << int(p->left.seq) << " t "
-                << p->left.sensor_ns / 1e6 << " ms  right seq " << int(p->right.seq) << " t "
-                << p->right.sensor_ns / 1e6 << " ms  offset " << off / 1e6 << " ms\n";
-  }
+      std::cout << "pair " << pair.index << "  left seq " << int(pair.left.seq) << " t "
+                << pair.left.sensor_ns / 1e6 << " ms  right seq " << int(pair.right.seq) << " t "
+                << pair.right.sensor_ns / 1e6 << " ms  offset " << off / 1e6 << " ms\n";
+  }));
   source->stop();
   const SourceCounters c = source->counters();
   const auto err = source->error();

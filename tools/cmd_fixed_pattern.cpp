@@ -5,7 +5,6 @@
 // fails.
 #include <spdlog/spdlog.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -17,6 +16,7 @@
 #include "naneye/app/processor.hpp"
 #include "naneye/app/sources.hpp"
 #include "naneye/recon/camera/fixed_pattern_io.hpp"
+#include "source_pairs.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -32,14 +32,8 @@ void collect(const std::string& uri, int frames, bool dark, recon::FixedPatternB
              recon::FixedPatternBuilder& right) {
   auto source = app::make_source_registry().open(lossless_input_uri(uri));
   source->start();
-  int n = 0;
-  while (n < frames) {
-    driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
-    if (!pair) {
-      if (driver::has_ended(source->state())) break;
-      continue;
-    }
-    const recon::RawImageView l = app::image_view(pair->left), r = app::image_view(pair->right);
+  const long long n = for_each_pair(*source, frames, [&](driver::StereoPair& pair) {
+    const recon::RawImageView l = app::image_view(pair.left), r = app::image_view(pair.right);
     if (dark) {
       left.add_dark(l);
       right.add_dark(r);
@@ -47,8 +41,7 @@ void collect(const std::string& uri, int frames, bool dark, recon::FixedPatternB
       left.add_flat(l);
       right.add_flat(r);
     }
-    ++n;
-  }
+  });
   source->stop();
   if (auto err = source->error()) throw std::runtime_error(uri + ": " + *err);
   if (n < frames)

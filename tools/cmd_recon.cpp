@@ -5,7 +5,6 @@
 // `--left L... --right R...` reads image pairs instead (any size, that of the calibration; the
 // images:// reader, driver::read_image): a pair that cannot be read is reported and skipped.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -33,6 +32,7 @@
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
 #include "naneye/recon/scene/dense.hpp"
 #include "naneye/recon/scene/sparse.hpp"
+#include "source_pairs.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -240,18 +240,13 @@ void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
   SceneStep scene(o, rig);
   FixedPatternInPlace fixed(o, rig);
   Report report(o.json);
-  while (o.max_pairs < 0 || report.pairs() < o.max_pairs) {
-    driver::PairPtr pair = source->next(std::chrono::milliseconds(200));
-    if (!pair) {
-      if (driver::has_ended(source->state())) break;
-      continue;
-    }
-    fixed.apply(0, pair->left.pixels.data(), app::image_view(pair->left));
-    fixed.apply(1, pair->right.pixels.data(), app::image_view(pair->right));
-    processor->process(*pair, *result);
-    scene.run(app::image_view(pair->left), app::image_view(pair->right), result->pair);
+  for_each_pair(*source, o.max_pairs, [&](driver::StereoPair& pair) {
+    fixed.apply(0, pair.left.pixels.data(), app::image_view(pair.left));
+    fixed.apply(1, pair.right.pixels.data(), app::image_view(pair.right));
+    processor->process(pair, *result);
+    scene.run(app::image_view(pair.left), app::image_view(pair.right), result->pair);
     scene.report(report, *result);
-  }
+  });
   source->stop();
   report.finish();
   if (auto err = source->error()) throw std::runtime_error(*err);
