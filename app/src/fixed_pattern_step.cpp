@@ -23,13 +23,8 @@ FixedPatternStep::FixedPatternStep(const std::filesystem::path& file, int width,
 }
 
 recon::RawImageView FixedPatternStep::correct(int eye, const recon::RawImageView& frame) {
-  const recon::FixedPattern& p = eye == 0 ? pattern_.left : pattern_.right;
-  std::vector<std::uint16_t>& out = buffer_[eye == 0 ? 0 : 1];
-  recon::remove_fixed_pattern(p, frame, out.data());
-  recon::RawImageView v = frame;
-  v.data = out.data();
-  v.stride = frame.width;
-  return v;
+  return recon::remove_fixed_pattern(eye == 0 ? pattern_.left : pattern_.right, frame,
+                                     buffer_[eye == 0 ? 0 : 1]);
 }
 
 }  // namespace naneye::app

@@ -217,4 +217,14 @@ void remove_fixed_pattern(const FixedPattern& p, const RawImageView& in, std::ui
   }
 }
 
+RawImageView remove_fixed_pattern(const FixedPattern& p, const RawImageView& in,
+                                  std::vector<std::uint16_t>& buffer) {
+  buffer.resize(static_cast<std::size_t>(in.width) * static_cast<std::size_t>(in.height));
+  remove_fixed_pattern(p, in, buffer.data());
+  RawImageView v = in;
+  v.data = buffer.data();
+  v.stride = in.width;
+  return v;
+}
+
 }  // namespace naneye::recon

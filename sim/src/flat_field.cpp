@@ -1,7 +1,5 @@
 #include "naneye/sim/flat_field.hpp"
 
-#include <tuple>
-
 #include "naneye/driver/wire_format.hpp"
 #include "naneye/sim/render.hpp"
 
@@ -51,13 +49,8 @@ void remove_fixed_pattern(const recon::StereoFixedPattern& pattern, recon::RawIm
                           recon::RawImageView& right, std::vector<std::uint16_t>& left_buffer,
                           std::vector<std::uint16_t>& right_buffer) {
   if (pattern.left.empty()) return;
-  for (auto [view, p, buffer] :
-       {std::tuple{&left, &pattern.left, &left_buffer}, std::tuple{&right, &pattern.right, &right_buffer}}) {
-    buffer->resize(static_cast<std::size_t>(view->width) * static_cast<std::size_t>(view->height));
-    recon::remove_fixed_pattern(*p, *view, buffer->data());
-    view->data = buffer->data();
-    view->stride = view->width;
-  }
+  left = recon::remove_fixed_pattern(pattern.left, left, left_buffer);
+  right = recon::remove_fixed_pattern(pattern.right, right, right_buffer);
 }
 
 }  // namespace naneye::sim

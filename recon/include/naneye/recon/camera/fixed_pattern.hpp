@@ -84,5 +84,8 @@ class FixedPatternBuilder {
 // out: in.width x in.height, stride = width. Frames of another size than the pattern's throw
 // std::invalid_argument. Saturated pixels stay saturated (a clipped value has no level to correct).
 void remove_fixed_pattern(const FixedPattern& pattern, const RawImageView& in, std::uint16_t* out);
+// The same into `buffer` (sized on first use), and the view of it: `in` with its data there.
+RawImageView remove_fixed_pattern(const FixedPattern& pattern, const RawImageView& in,
+                                  std::vector<std::uint16_t>& buffer);
 
 }  // namespace naneye::recon
