@@ -13,7 +13,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -219,7 +218,8 @@ class SceneStep {
 class FixedPatternInPlace {
  public:
   FixedPatternInPlace(const ReconOptions& o, const recon::StereoRig& rig) {
-    if (!o.fixed_pattern.empty()) step_.emplace(o.fixed_pattern, rig.left.width(), rig.left.height());
+    if (!o.fixed_pattern.empty())
+      step_ = std::make_unique<app::FixedPatternStep>(o.fixed_pattern, rig.left.width(), rig.left.height());
   }
   void apply(int eye, std::uint16_t* pixels, const recon::RawImageView& view) {
     if (!step_) return;
@@ -228,7 +228,9 @@ class FixedPatternInPlace {
   }
 
  private:
-  std::optional<app::FixedPatternStep> step_;
+  // A pointer, not std::optional: GCC 12's -O1 (the ASan build) warned maybe-uninitialized on the
+  // optional's string members once the unity batch inlined this.
+  std::unique_ptr<app::FixedPatternStep> step_;
 };
 
 void run_recon_source(const ReconOptions& o, const recon::StereoRig& rig) {
