@@ -25,41 +25,47 @@ constexpr int kMaxStride = (kMaxSide + 2 + 3) / 4 * 4,
               kMaxGrown8 = lk_dots::padded((kMaxSide + 2) * kMaxStride);
 
 // sum_p (b * v)_p (b * v)_p^T over the window grown by one pixel (the kernel's reach) for the
-// 2-vectors v = (x, y) per pixel of the side x side window (zero outside it): the noise of a weighted
-// sum of v under the pair's 3 x 3 noise kernel b. The callers project the steepest-descent vectors
-// onto the translation first (P B P^T = the same sum over P sd), so 2 filtered images, not 6. Float
-// 4-vectors along the rows over zero-padded copies (a covariance needs no more than float's 1e-7).
-Eigen::Matrix2d kernel_outer(const std::array<float, 9>& b, const float* x, const float* y, int side) {
+// K-vectors v = (v_0, .., v_K-1) per pixel of the side x side window (zero outside it), each v_i an
+// image over the window, row-major: the noise of weighted sums of the pixels under the pair's 3 x 3
+// noise kernel b. Float 4-vectors along the rows over zero-padded copies (a covariance needs no more
+// than float's 1e-7).
+template <int K>
+Eigen::Matrix<double, K, K> kernel_gram(const std::array<float, 9>& b, const float* const (&v)[K], int side) {
   using simd::V4;
   const int g = side + 2, stride = (g + 3) / 4 * 4, in_stride = stride + 4;
-  // The inputs at (2, 2) of zero planes of side + 4 rows: out(r, c) = sum b(i, j) in(r + i, c + j).
-  alignas(16) float pad[2][(kMaxSide + 4) * (kMaxStride + 4)] = {};
-  for (int r = 0; r < side; ++r)
-    for (int c = 0; c < side; ++c) {
-      pad[0][(r + 2) * in_stride + c + 2] = x[r * side + c];
-      pad[1][(r + 2) * in_stride + c + 2] = y[r * side + c];
-    }
   const int n8 = lk_dots::padded(g * stride);
-  alignas(32) float f[2][kMaxGrown8];
-  for (int e = 0; e < 2; ++e) {
+  // Each input at (2, 2) of a zero plane of side + 4 rows: out(r, c) = sum b(i, j) in(r + i, c + j).
+  alignas(16) float pad[(kMaxSide + 4) * (kMaxStride + 4)] = {};
+  alignas(32) float f[K][kMaxGrown8];
+  for (int e = 0; e < K; ++e) {
+    for (int r = 0; r < side; ++r)
+      for (int c = 0; c < side; ++c) pad[(r + 2) * in_stride + c + 2] = v[e][r * side + c];
     for (int r = 0; r < g; ++r)
       for (int c = 0; c < stride; c += 4) {  // columns >= g read only the zero padding: stay 0
         V4 acc = V4{};
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
-            acc +=
-                b[static_cast<std::size_t>(i * 3 + j)] * simd::load<V4>(&pad[e][(r + i) * in_stride + c + j]);
+            acc += b[static_cast<std::size_t>(i * 3 + j)] * simd::load<V4>(&pad[(r + i) * in_stride + c + j]);
         simd::store(&f[e][r * stride + c], acc);
       }
     for (int k = g * stride; k < n8; ++k) f[e][k] = 0.f;
   }
-  double rx[2], ry[1];
-  const float* with_y[1] = {f[1]};
-  lk_dots::dot_many(f[0], 0.f, with_y, 1, n8, rx);
-  lk_dots::dot_many(f[1], 0.f, nullptr, 0, n8, ry);
-  Eigen::Matrix2d out;
-  out << rx[0], rx[1], rx[1], ry[0];
+  Eigen::Matrix<double, K, K> out;
+  double row[K];
+  for (int i = 0; i < K; ++i) {
+    const float* rest[K];
+    for (int j = i + 1; j < K; ++j) rest[j - i - 1] = f[j];
+    lk_dots::dot_many(f[i], 0.f, rest, K - 1 - i, n8, row);
+    for (int j = i; j < K; ++j) out(i, j) = out(j, i) = row[j - i];
+  }
   return out;
+}
+
+// The translation's noise: kernel_gram over the steepest-descent vectors projected onto it first
+// (P B P^T = the same sum over P sd), 2 filtered images, not 6.
+Eigen::Matrix2d kernel_outer(const std::array<float, 9>& b, const float* x, const float* y, int side) {
+  const float* const v[2] = {x, y};
+  return kernel_gram<2>(b, v, side);
 }
 
 // p = P sd per pixel (P a 2 x 6 projection) as two float arrays over whole blocks of the padded
@@ -349,12 +355,28 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     out.ssr_outer_dn2 = outer * ss;
   }
   // Covariance of the template-frame translation, mapped to the target by the warp. Residual noise
-  // per image pixel: s^2 = SSR / (N - 8); with correlated noise (lk_affine.hpp) the sandwich form.
-  const double s2 = ssr / (n - 8);
+  // per image pixel: s^2 = SSR / (N - tr(P C)), with correlated noise (lk_affine.hpp) the sandwich form.
   const auto& b = s.noise_kernel;
   double b2 = 0;
   for (float x : b) b2 += double(x) * x;
   const bool white = b == LkSettings{}.noise_kernel;
+  out.noise_dof = n - 8;
+  if (!white) {
+    // The residual is (I - P) e, P the hat matrix of the fit's 8 regressors (the window's mean, its
+    // gain: the template itself, and the 6 steepest-descent images), so E[SSR] = s^2 (N - tr(P C))
+    // with C the noise's correlation (Seber & Lee, "Linear Regression Analysis", 2003, Thm 1.5).
+    // White noise: tr(P C) = 8. Under the Bayer binomial a smooth regressor keeps more of the noise
+    // (the constant one ~7x its share): on the sparse path's windows (bench_scene --bayer, the
+    // simulator's blur and the measured sensor's alike) tr(P C) ~ 30 at 9 x 9, 33-36 at 13 x 13 to
+    // 21 x 21, so N - 8 had the 9 x 9's residual variance 0.7x too small, and the wider window's
+    // tests (sparse_wide.cpp) refused most Bayer windows for it.
+    const float* const x[8] = {ones, t, sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5]};
+    const Eigen::Matrix<double, 8, 8> xx = kernel_gram<8>(LkSettings{}.noise_kernel, x, side);
+    const Eigen::Matrix<double, 8, 8> xcx = kernel_gram<8>(b, x, side) / b2;
+    const double trace = xx.partialPivLu().solve(xcx).trace();
+    if (trace > 8 && trace < n) out.noise_dof = n - trace;
+  }
+  const double s2 = ssr / out.noise_dof;
   // Errors in variables (Fuller, "Measurement Error Models", 1987, Sec. 1.1): the steepest-descent
   // images are the noisy template's gradients, so H = sum sd sd^T holds their noise too, and the
   // fit's sensitivity is the signal's part only, Hs = H - E[noise part]. Then the shift is

@@ -43,6 +43,9 @@ struct LkResult {
   // The final residual in the template's grey levels (DN^2): over the window, and over the pixels
   // beyond LkSettings::inner_radius (0 when that is 0). Both images' noise is in it.
   double ssr_dn2 = 0, ssr_outer_dn2 = 0;
+  // The residual's degrees of freedom, E[SSR] / the noise's variance per pixel: N - 8 for white
+  // noise, N - tr(P C) under LkSettings::noise_kernel (lk_affine.cpp).
+  double noise_dof = 0;
   // With LkSettings::inner_radius: the covariance of (this fit's px - the px of the same fit over the
   // inner pixels only) per unit residual variance (in the normalised template's units: DN^2 divided
   // by template_ss_dn2), px^2; and the template's sum of squared deviations, DN^2.
