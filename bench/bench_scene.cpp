@@ -3,19 +3,22 @@
 //   ours:   recon::scene::SparseReconstructor (docs/scene.md)
 //   OpenCV: goodFeaturesToTrack + calcOpticalFlowPyrLK left -> right (from zero disparity) +
 //           undistortPoints + triangulatePoints (P1 = [I|0], P2 = [R|T]), on the same luminance
-//           (raw_to_luminance, min-max stretched to 8 bits for OpenCV).
+//           (raw_to_luminance, its 10-bit scale to 8 bits for OpenCV, the same for both eyes).
 // An outlier is a point whose left pixel sees no surface the right eye sees, or whose depth is off
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--repeat N] [--bayer] [--real-sensor] [--defocus SIGMA]
 //       [--refusals] [--digest] [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z]
-//       [--raw-search] [--wide-radius R] [--dense-radius R] [--max-radius R] [--dense-iterations N]
+//       [--raw-search] [--wide-radius R] [--wide-step S] [--dense-radius R] [--max-radius R]
+//       [--dense-iterations N]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
 // features per pair by status. What-ifs, one setting changed: --residual-p P, --max-sigma PX, the
 // dense validity tests' (dense_match.hpp); --min-zncc Z, --min-final-zncc Z, the sparse coarse
 // search's and LK match's acceptance (sparse.hpp); --raw-search, that search on the unfiltered mono
 // luminance (SparseSettings::search_binomial off); --wide-radius R, the sparse path's wider LK
-// window (0: the narrow window only). --dense-radius R: the dense sub-pixel window, fixed;
+// window (0: the narrow window only); --wide-step S, its nested widening's ring, px (sparse.hpp).
+// The sparse table's last column: rms(err / depth_sigma_mm) over our good points, the sigma's honesty
+// (0.7-1.4 is the band). --dense-radius R: the dense sub-pixel window, fixed;
 // --max-radius R: the largest window the matcher may choose per pair (R = 3: fixed at 3, as before
 // the choice). --dense-iterations N: the dense sub-pixel step's Gauss-Newton passes (default 4). The dense
 // table's r column: the radius each pair was matched with, in render order (the matcher carries it from pair
@@ -92,7 +95,9 @@ struct Tally {
   long points = 0, outliers = 0, pairs = 0;
   double rel_err_sum = 0;  // |dZ| / Z over the inliers
   long inliers = 0;
-  void add(double z, const cv::Mat& truth, double u, double v) {
+  double z2_sum = 0;  // (dZ / sigma)^2 over the inliers given a sigma
+  long z_count = 0;
+  void add(double z, const cv::Mat& truth, double u, double v, double sigma = NAN) {
     ++points;
     const int c = static_cast<int>(std::lround(u)), r = static_cast<int>(std::lround(v));
     const double zt = (c >= 0 && r >= 0 && c < truth.cols && r < truth.rows) ? truth.at<double>(r, c) : NAN;
@@ -102,6 +107,10 @@ struct Tally {
     }
     rel_err_sum += std::abs(z - zt) / zt;
     ++inliers;
+    if (sigma > 0) {
+      z2_sum += (z - zt) * (z - zt) / (sigma * sigma);
+      ++z_count;
+    }
   }
   double p50() {
     std::sort(ms.begin(), ms.end());
@@ -300,8 +309,16 @@ void print_refusals(const std::vector<recon::scene::MatchCounts>& rows) {
 // The sparse path's features per pair by their status (sparse.hpp PointStatus), per scene.
 constexpr int kStatuses = static_cast<int>(recon::scene::PointStatus::imprecise) + 1;
 using StatusRow = std::array<long, kStatuses>;
+// Per LK window radius (ScenePoint::window_radius_px): good points, and their sum of (dZ / sigma)^2.
+struct WindowTally {
+  long points = 0;
+  double z2 = 0;
+};
+using WidenedRow = std::array<WindowTally, recon::scene::kMaxLkRadius + 1>;
 
-void print_sparse_refusals(const std::vector<StatusRow>& rows, int seeds) {
+void print_sparse_refusals(const std::vector<StatusRow>& rows, const std::vector<WidenedRow>& widened,
+                           const recon::scene::SparseSettings& ss, const std::vector<int>& wide_radii,
+                           int seeds) {
   std::printf("\n%-10s |", "features");
   for (int k = 0; k < kStatuses; ++k)
     std::printf(" %9.9s", recon::scene::to_string(static_cast<recon::scene::PointStatus>(k)));
@@ -312,6 +329,21 @@ void print_sparse_refusals(const std::vector<StatusRow>& rows, int seeds) {
     std::printf("\n");
   }
   std::printf("sparse features tried per pair, by status (matching stops at max_points valid)\n");
+  std::vector<int> radii{ss.lk.radius};
+  radii.insert(radii.end(), wide_radii.begin(), wide_radii.end());
+  std::printf("\n%-10s |", "window");
+  for (int r : radii) std::printf(" %6dx%-6d", 2 * r + 1, 2 * r + 1);
+  std::printf("\n");
+  for (std::size_t k = 0; k < widened.size(); ++k) {
+    std::printf("%-10s |", sim::textured_preset_names()[k].c_str());
+    for (int r : radii) {
+      const WindowTally& w = widened[k][static_cast<std::size_t>(r)];
+      std::printf(" %6.1f %6.2f", double(w.points) / seeds, std::sqrt(w.z2 / std::max(1L, w.points)));
+    }
+    std::printf("\n");
+  }
+  std::printf(
+      "good sparse points per pair by the LK window their match came from (side, px), and their rms(e/s)\n");
 }
 
 int main(int argc, char** argv) {
@@ -337,6 +369,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--raw-search")) ss.search_binomial = false;
     if (!std::strcmp(argv[i], "--min-final-zncc") && i + 1 < argc) ss.min_final_zncc = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--wide-step") && i + 1 < argc) ss.wide_step = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
@@ -373,6 +406,7 @@ int main(int argc, char** argv) {
   std::vector<CommonTally> common_rows;
   std::vector<recon::scene::MatchCounts> refused;
   std::vector<StatusRow> statuses;
+  std::vector<WidenedRow> widened;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> digests;
   std::printf("bench_scene: %d renders per scene, %s, blur sigma %.2f px, %s, paper-d3 rig, one thread\n",
               seeds, bayer ? "GRBG Bayer" : "mono", sensor.blur_sigma_px(),
@@ -384,8 +418,8 @@ int main(int argc, char** argv) {
         pattern.left.dark_frames, pattern.left.flat_frames, pattern.left.dsnu_dn, pattern.left.dark_se_dn,
         100 * pattern.left.prnu, 100 * pattern.left.gain_se);
   std::printf("%-10s | %-44s | %-44s\n", "", "ours (sparse)", "OpenCV path");
-  std::printf("%-10s | %7s %7s %9s %9s %7s | %7s %7s %9s %9s %7s\n", "scene", "p50 ms", "pts", "good",
-              "outl %", "err %", "p50 ms", "pts", "good", "outl %", "err %");
+  std::printf("%-10s | %7s %7s %9s %9s %7s | %7s %7s %9s %9s %7s | %s\n", "scene", "p50 ms", "pts", "good",
+              "outl %", "err %", "p50 ms", "pts", "good", "outl %", "err %", "ours rms(e/s)");
   for (const auto& name : sim::textured_preset_names()) {
     // Each scene starts with fresh reconstructors, as a camera switched on in front of it would: the
     // dense window radius and the sparse ids carry over between pairs, and carried from one preset
@@ -398,6 +432,7 @@ int main(int argc, char** argv) {
     CommonTally both;
     recon::scene::MatchCounts mc;
     StatusRow st{};
+    WidenedRow wd{};
     Digest dg_sparse, dg_dense;
     for (int s = 0; s < seeds; ++s) {
       const sim::TexturedPair p = sim::numbered_render(renderer, name, s);
@@ -412,7 +447,15 @@ int main(int argc, char** argv) {
       digest_sparse(dg_sparse, res);
       for (const auto& q : res.points) {
         ++st[static_cast<std::size_t>(q.status)];
-        if (q.valid()) a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y());
+        if (!q.valid()) continue;
+        a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y(), q.depth_sigma_mm);
+        const double zt = p.depth.at<double>(static_cast<int>(std::lround(q.left_px.y())),
+                                             static_cast<int>(std::lround(q.left_px.x())));
+        if (std::abs(q.X.z() - zt) <= 0.05 * zt) {  // a good point (NaN truth: not)
+          WindowTally& w = wd[static_cast<std::size_t>(q.window_radius_px)];
+          ++w.points;
+          w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+        }
       }
       opencv_path(rig, ours.luma(), p.depth, b);
       // Dense on the luminance the sparse path made (the daemon shares it the same way).
@@ -435,6 +478,7 @@ int main(int argc, char** argv) {
     common_rows.push_back(both);
     refused.push_back(mc);
     statuses.push_back(st);
+    widened.push_back(wd);
     digests.emplace_back(dg_sparse.h, dg_dense.h);
     auto row = [](Tally& t) {
       std::printf(" %7.2f %7.0f %9.0f %8.2f%% %6.2f%%", t.p50(), double(t.points) / t.pairs,
@@ -445,7 +489,7 @@ int main(int argc, char** argv) {
     row(a);
     std::printf(" |");
     row(b);
-    std::printf("\n");
+    std::printf(" | %6.2f\n", std::sqrt(a.z2_sum / std::max(1L, a.z_count)));
   }
   std::printf(
       "pts/good: points per pair, all and within 5 %% of the truth where both eyes see it; outl: the "
@@ -487,7 +531,8 @@ int main(int argc, char** argv) {
                   static_cast<unsigned long long>(digests[k].second));
   if (refusals) {
     print_refusals(refused);
-    print_sparse_refusals(statuses, seeds);
+    const recon::scene::SparseReconstructor sparse(rig, ss);  // for its window radii
+    print_sparse_refusals(statuses, widened, ss, sparse.wide_radii(), seeds);
   }
   return 0;
 }

@@ -100,6 +100,9 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
     throw std::invalid_argument("sparse: lk.radius " + std::to_string(s.lk.radius) + " and wide_radius " +
                                 std::to_string(s.wide_radius) + " must be at most " +
                                 std::to_string(kMaxLkRadius) + " (the affine LK's widest window)");
+  if (s.wide_step < 1)
+    throw std::invalid_argument("sparse: wide_step " + std::to_string(s.wide_step) +
+                                " must be at least 1 px");
   R_lr_ = rig_.R;
   T_lr_ = rig_.T;
   R_rl_ = rig_.R.transpose();
@@ -138,9 +141,13 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.left_search.assign(np, 0.f);
   luma_.right_search.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
-  const int wide = std::max(s_.wide_radius, s_.lk.radius);
-  usable_wide_[0] = usable_mask(0, wide);
-  usable_wide_[1] = usable_mask(1, wide + 1);
+  for (int r = s_.lk.radius + s_.wide_step;; r += s_.wide_step) {
+    r = std::min(r, s_.wide_radius);
+    if (r <= s_.lk.radius) break;
+    wide_radii_.push_back(r);
+    usable_wide_.push_back({usable_mask(0, r), usable_mask(1, r + 1)});
+    if (r == s_.wide_radius) break;
+  }
   init_wide();
   id_scratch_.assign(static_cast<std::size_t>(s_.max_features), 0);
   inv_norm_[0].assign(np, 0.f);
@@ -210,11 +217,11 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
     p.right_px.setConstant(std::numeric_limits<double>::quiet_NaN());
     wide_.emplace_back();
     match(luma, f, out.noise_sigma_dn, p, wide_.back());
-    // Counted as one of max_points if either window's depth is precise enough (choose_wide may
-    // still refuse the wider one: the final count follows it).
-    const WideCandidate& wc = wide_.back();
+    // Counted as one of max_points if the narrow or the widest window's depth is precise enough
+    // (choose_wide may still refuse the wider one: the final count follows it).
+    const WideStep* wc = wide_.back().widest();
     out.valid_count +=
-        p.valid() && (precise(p.X, p.depth_sigma_mm) || (wc.usable && precise(wc.X, wc.depth_sigma_mm)));
+        p.valid() && (precise(p.X, p.depth_sigma_mm) || (wc && precise(wc->X, wc->depth_sigma_mm)));
     out.points.push_back(p);
     ++tried;
   }
@@ -274,6 +281,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   const LkResult& lk = narrow;
   p.zncc = lk.zncc;
   p.right_px = lk.px;
+  p.window_radius_px = s_.lk.radius;
   // Left-right check: the right window, searched along its own curve in the left image, must come
   // back to the feature.
   const Undistorted ur = rig_.right.undistort(lk.px);
@@ -297,12 +305,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
     return;
   }
   p.status = PointStatus::ok;
-  const LkResult wide = widen(luma, f, xl, m.w, A0, lks, narrow, wc.hausman);
-  if (wide.converged && triangulate_match(p.left_px, wide.px, wide.cov, wc.X, wc.depth_sigma_mm)) {
-    wc.usable = true;
-    wc.right_px = wide.px;
-    wc.zncc = wide.zncc;
-  }
+  widen_steps(luma, f, xl, m.w, A0, lks, narrow, p.left_px, wc);
 }
 
 bool SparseReconstructor::triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,

@@ -45,7 +45,8 @@ void SparseReconstructor::init_wide() {
   wide_kappa_[0] = noise_dof_factor(LkSettings{}.noise_kernel);
   wide_kappa_[1] = noise_dof_factor(LkSettings::binomial3());
   const int wide = std::max(s_.wide_radius, s_.lk.radius), side = 2 * wide + 1;
-  shape_wide_.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
+  for (auto& shape : shape_wide_)
+    shape.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
   wide_.reserve(static_cast<std::size_t>(s_.max_features));
   const int cell = s_.features.cell_px;
   const int gw = (rig_.left.width() + cell - 1) / cell, gh = (rig_.left.height() + cell - 1) / cell;
@@ -82,26 +83,48 @@ void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int
   }
 }
 
+void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
+                                      double w, const Eigen::Matrix2d& A0, const LkSettings& lks,
+                                      const LkResult& narrow, const Eigen::Vector2d& left_px,
+                                      WideCandidate& wc) {
+  LkResult fits[2];  // this step's and the one before, alternately (as shape_wide_)
+  const LkResult* inner = &narrow;
+  const Eigen::Vector2d* inner_shape = shape_.data();
+  for (std::size_t k = 0; k < wide_radii_.size(); ++k) {
+    Eigen::Vector2d* shape = shape_wide_[k % 2].data();
+    LkResult& fit = fits[k % 2];
+    WideStep& st = wc.step[k];
+    fit = widen(luma, f, xl, w, A0, lks, k, *inner, inner_shape, shape, st.hausman);
+    if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return;
+    st.usable = true;
+    st.right_px = fit.px;
+    st.zncc = fit.zncc;
+    inner = &fit;
+    inner_shape = shape;
+  }
+}
+
 LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
-                                    double w, const Eigen::Matrix2d& A0, const LkSettings& lks,
-                                    const LkResult& narrow, double& hausman) {
+                                    double w, const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k,
+                                    const LkResult& narrow, const Eigen::Vector2d* inner_shape,
+                                    Eigen::Vector2d* shape, double& hausman) {
   hausman = -1;
-  const int rn = s_.lk.radius, rw = s_.wide_radius;
-  if (rw <= rn || !usable_wide_[0][static_cast<std::size_t>(f.v) * luma.width + f.u]) return {};
+  const int rn = k == 0 ? s_.lk.radius : wide_radii_[k - 1], rw = wide_radii_[k];
+  if (!usable_wide_[k][0][static_cast<std::size_t>(f.v) * luma.width + f.u]) return {};
   const int sn = 2 * rn + 1, sw = 2 * rw + 1;
   for (int dr = -rn; dr <= rn; ++dr)
     for (int dc = -rn; dc <= rn; ++dc)
-      shape_wide_[static_cast<std::size_t>((dr + rw) * sw + dc + rw)] =
-          shape_[static_cast<std::size_t>((dr + rn) * sn + dc + rn)];
-  predict_shape(f, w, rw, rn, shape_wide_.data());
+      shape[static_cast<std::size_t>((dr + rw) * sw + dc + rw)] =
+          inner_shape[static_cast<std::size_t>((dr + rn) * sn + dc + rn)];
+  predict_shape(f, w, rw, rn, shape);
   LkSettings wl = lks;
   wl.radius = rw;
   wl.inner_radius = rn;
   const LkResult wide =
       refine_affine(luma.left_view(), detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
-                    usable_wide_[1].data(), narrow.px, A0, shape_wide_.data(), wl, &narrow.A);
+                    usable_wide_[k][1].data(), narrow.px, A0, shape, wl, &narrow.A);
   if (!wide.converged || wide.zncc < s_.min_final_zncc || !(narrow.ssr_dn2 > 0)) return {};
-  const double nn = sn * sn, nw = sw * sw, e_ring = (nw - nn) * (nw - 8) / nw, dof_n = nn - 8;
+  const double nn = sn * sn, nw = sw * sw, e_ring = (nw - nn) * wide.noise_dof / nw, dof_n = narrow.noise_dof;
   if (!(dof_n > 0 && e_ring > 0)) return {};
   // The difference's covariance at the narrow window's residual variance (the wide one's would be
   // inflated by the very misfit the test looks for).
@@ -128,36 +151,45 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, co
 void SparseReconstructor::choose_wide(SparseResult& out) {
   const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
   const int gh = static_cast<int>(cell_point_.size()) / gw;
-  std::fill(cell_point_.begin(), cell_point_.end(), -1);
-  for (std::size_t k = 0; k < wide_.size(); ++k)
-    if (wide_[k].hausman >= 0) {
-      const auto& q = out.points[k].left_px;
-      cell_point_[static_cast<std::size_t>(static_cast<int>(q.y()) / cell * gw +
-                                           static_cast<int>(q.x()) / cell)] = static_cast<int>(k);
-    }
   const double r2 = s_.wide_pool_radius_px * s_.wide_pool_radius_px;
   const int reach = static_cast<int>(std::ceil(s_.wide_pool_radius_px / cell));
-  for (std::size_t k = 0; k < wide_.size(); ++k) {
-    ScenePoint& p = out.points[k];
-    const WideCandidate& wc = wide_[k];
-    if (!p.valid() || !wc.usable) continue;
-    const int cx = static_cast<int>(p.left_px.x()) / cell, cy = static_cast<int>(p.left_px.y()) / cell;
-    double sum = 0;
-    int count = 0;
-    for (int y = std::max(0, cy - reach); y <= std::min(gh - 1, cy + reach); ++y)
-      for (int x = std::max(0, cx - reach); x <= std::min(gw - 1, cx + reach); ++x) {
-        const int j = cell_point_[static_cast<std::size_t>(y * gw + x)];
-        if (j < 0 || (out.points[static_cast<std::size_t>(j)].left_px - p.left_px).squaredNorm() > r2)
-          continue;
-        sum += wide_[static_cast<std::size_t>(j)].hausman;
-        ++count;
+  for (std::size_t step = 0; step < wide_radii_.size(); ++step) {
+    // Every feature with this step's shift test pools into it, kept or not (the statistic holds
+    // under the model either way; more of them see a surface's common bias sooner).
+    std::fill(cell_point_.begin(), cell_point_.end(), -1);
+    bool any = false;
+    for (std::size_t k = 0; k < wide_.size(); ++k)
+      if (wide_[k].step[step].hausman >= 0) {
+        const auto& q = out.points[k].left_px;
+        cell_point_[static_cast<std::size_t>(static_cast<int>(q.y()) / cell * gw +
+                                             static_cast<int>(q.x()) / cell)] = static_cast<int>(k);
+        any = true;
       }
-    const double bound = count * chi2_upper_ratio(count, wide_z_);
-    if (sum > bound) continue;
-    p.right_px = wc.right_px;
-    p.X = wc.X;
-    p.depth_sigma_mm = wc.depth_sigma_mm;
-    p.zncc = wc.zncc;
+    if (!any) break;
+    for (std::size_t k = 0; k < wide_.size(); ++k) {
+      ScenePoint& p = out.points[k];
+      WideCandidate& wc = wide_[k];
+      const WideStep& st = wc.step[step];
+      if (!p.valid() || wc.chosen != static_cast<int>(step) || !st.usable) continue;
+      const int cx = static_cast<int>(p.left_px.x()) / cell, cy = static_cast<int>(p.left_px.y()) / cell;
+      double sum = 0;
+      int count = 0;
+      for (int y = std::max(0, cy - reach); y <= std::min(gh - 1, cy + reach); ++y)
+        for (int x = std::max(0, cx - reach); x <= std::min(gw - 1, cx + reach); ++x) {
+          const int j = cell_point_[static_cast<std::size_t>(y * gw + x)];
+          if (j < 0 || (out.points[static_cast<std::size_t>(j)].left_px - p.left_px).squaredNorm() > r2)
+            continue;
+          sum += wide_[static_cast<std::size_t>(j)].step[step].hausman;
+          ++count;
+        }
+      if (sum > count * chi2_upper_ratio(count, wide_z_)) continue;
+      p.right_px = st.right_px;
+      p.X = st.X;
+      p.depth_sigma_mm = st.depth_sigma_mm;
+      p.zncc = st.zncc;
+      p.window_radius_px = wide_radii_[step];
+      wc.chosen = static_cast<int>(step) + 1;
+    }
   }
 }
 

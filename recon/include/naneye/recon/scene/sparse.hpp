@@ -5,6 +5,7 @@
 // niter2 + reprojection refinement (triangulation.hpp), each with the depth sigma its own match
 // precision gives. A feature whose match leaves a model's domain is flagged, never triangulated.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -49,11 +50,20 @@ struct SparseSettings {
   // variance falls to 0.14x. A mono render at the measured sensor (bench_scene --real-sensor,
   // --refusals): the tube's coarse ZNCC fell below min_zncc on 164 of its ~390 features per pair.
   bool search_binomial = true;
-  // The wider LK window (docs/scene.md, "Sparse path" step 5), px: 13 x 13 against lk.radius's 9 x 9
-  // (2.1x the pixels: ~0.7x the disparity sigma where the texture is even). Its match replaces the
-  // narrow one only where the affine warp holds over it (sparse.cpp); 0 (or <= lk.radius): never.
-  // At most kMaxLkRadius (10); the reconstructor refuses more.
-  int wide_radius = 6;
+  // The widest LK window (docs/scene.md, "Sparse path" step 5), px: 21 x 21 against lk.radius's
+  // 9 x 9 (5.4x the pixels: ~0.45x the disparity sigma where the texture is even). A wider window's
+  // match replaces the narrower one's only where the affine warp holds over it (sparse_wide.cpp);
+  // 0 (or <= lk.radius): never. At most kMaxLkRadius (10); the reconstructor refuses more. 13 x 13
+  // until 2026-12-07; 21 x 21 with the nesting below: at the measured sensor, fixed pattern
+  // removed, the planes' depth error 0.32 -> 0.26 % (mono), 0.31 -> 0.23 % (Bayer), the height
+  // field's unchanged, for ~2x the sparse path's time (docs/scene.md, "The nested widening").
+  int wide_radius = 10;
+  // px; the window widens from lk.radius to wide_radius by rings this wide (9 -> 13 -> 17 -> 21),
+  // each step's match held to the three tests against the step before it and kept only if every
+  // narrower step was: a plane goes on to the widest, a curved surface stops where its misfit shows.
+  // One step straight to 21 x 21 tests its fit against the 9 x 9 one's noise, which hides the
+  // misfit a test against 17 x 17 shows (the sphere: rms(err/sigma) 2.14 at 21 x 21 in one step).
+  int wide_step = 2;
   // Each of the wider window's three tests (its outer ring's residual against the narrow window's
   // noise, its shift against the narrow one's, and that shift test pooled over the neighbourhood;
   // sparse_wide.cpp) refuses this share of the features where the affine holds: the price is their
@@ -106,6 +116,9 @@ struct ScenePoint {
   // the calibration carries its covariance.
   double calib_sigma_mm = std::numeric_limits<double>::quiet_NaN();
   double zncc = 0;
+  // px; the radius of the LK window its match came from: lk.radius, or the widest step of the
+  // nested widening it kept (SparseSettings::wide_step); 0 unless matched.
+  int window_radius_px = 0;
   PointStatus status = PointStatus::no_candidates;
   bool valid() const { return status == PointStatus::ok; }
 };
@@ -150,17 +163,31 @@ class SparseReconstructor {
   // Non-zero where a window of `radius` around the pixel lies inside the camera's model domain and
   // the active image (column 249 and the edge rows excluded). eye 0 = left.
   const std::vector<std::uint8_t>& usable(int eye) const { return usable_[eye]; }
+  // px; the nested widening's window radii beyond lk.radius, narrowest first (SparseSettings::wide_step).
+  const std::vector<int>& wide_radii() const { return wide_radii_; }
   // A new sequence (source restarted, seek): the next pair's features all get new ids.
   void reset_ids() { ids_.reset(); }
 
  private:
-  // The wider LK window's result for one feature tried (sparse_wide.cpp).
-  struct WideCandidate {
-    double hausman = -1;  // its shift against the narrow window's (chi-square, 2 dof); < 0: none
+  // One step of the nested widening for one feature (sparse_wide.cpp).
+  struct WideStep {
+    double hausman = -1;  // its shift against the step before (chi-square, 1 dof); < 0: none
     bool usable = false;  // passed its own tests and triangulated
     Eigen::Vector2d right_px{0, 0};
     Eigen::Vector3d X{0, 0, 0};
     double depth_sigma_mm = 0, zncc = 0;
+  };
+  // The widening's steps for one feature tried, narrowest first; `chosen`: how many choose_wide kept.
+  struct WideCandidate {
+    std::array<WideStep, kMaxLkRadius> step;
+    int chosen = 0;
+    // The widest step that passed its own tests, or nullptr.
+    const WideStep* widest() const {
+      const WideStep* w = nullptr;
+      for (const WideStep& st : step)
+        if (st.usable) w = &st;
+      return w;
+    }
   };
   // noise_sigma_dn: the left image's (SparseResult::noise_sigma_dn), for the final residual test.
   void match(const StereoLuma& luma, const Feature& f, double noise_sigma_dn, ScenePoint& p,
@@ -172,17 +199,24 @@ class SparseReconstructor {
     return depth_sigma_mm <= s_.max_depth_sigma_rel * X.z();
   }
   void init_wide();
-  // Each valid point takes its wider window's match where its neighbourhood's pooled shift test
-  // passes (sparse_wide.cpp).
+  // Each valid point takes its widest step's match whose neighbourhood's pooled shift test passes
+  // at that step and every narrower one (sparse_wide.cpp).
   void choose_wide(SparseResult& out);
+  // The nested widening of `narrow` (wide_radii_), into wc, until a step fails its own tests.
+  void widen_steps(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
+                   const Eigen::Matrix2d& A0, const LkSettings& lks, const LkResult& narrow,
+                   const Eigen::Vector2d& left_px, WideCandidate& wc);
   // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
   // right image for a surface facing the camera at inverse depth w (exact model), relative to the
   // centre's place, row-major over the (2 rad + 1)^2 window.
   void predict_shape(const Feature& f, double w, int rad, int skip, Eigen::Vector2d* out) const;
-  // The wider window's refinement of `narrow` where its feature's window fits and it passes its own
-  // tests (sparse_wide.cpp), else not converged; `hausman`: its shift test's statistic (or -1).
+  // Step k's refinement of `narrow` (the step before, radius wide_radii_[k - 1] or lk.radius; its
+  // template shape inner_shape) where the feature's window fits and it passes its own tests
+  // (sparse_wide.cpp), else not converged; its template shape into `shape`; `hausman`: its shift
+  // test's statistic (or -1).
   LkResult widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
-                 const Eigen::Matrix2d& A0, const LkSettings& lks, const LkResult& narrow, double& hausman);
+                 const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k, const LkResult& narrow,
+                 const Eigen::Vector2d* inner_shape, Eigen::Vector2d* shape, double& hausman);
 
   StereoRig rig_;
   std::optional<CalibrationUncertainty> calib_;  // empty: the calibration has no covariance
@@ -191,10 +225,12 @@ class SparseReconstructor {
   Eigen::Vector3d T_lr_, T_rl_;
   std::vector<std::uint8_t> usable_[2];         // LK window radius + 1
   std::vector<std::uint8_t> usable_search_[2];  // coarse window
-  std::vector<std::uint8_t> usable_wide_[2];    // the wider LK window (left: radius, right: + 1)
-  double wide_z_ = 0;                           // upper normal quantile of wide_false_reject
-  double wide_chi1_ = 0;                        // chi-square(1) upper quantile of wide_false_reject
-  double wide_kappa_[2] = {1, 1};               // noise_dof_factor: mono, Bayer
+  std::vector<int> wide_radii_;                 // the widening's steps, px (wide_step)
+  // Per step: where its window fits (left: radius, right: + 1).
+  std::vector<std::array<std::vector<std::uint8_t>, 2>> usable_wide_;
+  double wide_z_ = 0;              // upper normal quantile of wide_false_reject
+  double wide_chi1_ = 0;           // chi-square(1) upper quantile of wide_false_reject
+  double wide_kappa_[2] = {1, 1};  // noise_dof_factor: mono, Bayer
   // The LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject; < 0: off).
   double final_ssr_quantile_ = 0;
   std::vector<WideCandidate> wide_;       // per feature tried
@@ -210,10 +246,10 @@ class SparseReconstructor {
   // The same rays turned into the right camera's frame, R (x, y, 1), as three planes (x, y, z): the
   // LK shape (predict_shape) needs X_r = R ray z + T at ~170 pixels per feature, and R ray is fixed.
   std::vector<double> right_rays_;
-  std::vector<float> inv_norm_[2];           // per pixel: 1 / |window - mean| of the coarse window
-  std::vector<double> norm_scratch_;         // scratch of window_inverse_norms
-  std::vector<Eigen::Vector2d> shape_;       // the LK template's predicted places in the right image
-  std::vector<Eigen::Vector2d> shape_wide_;  // the same for the wider window
+  std::vector<float> inv_norm_[2];              // per pixel: 1 / |window - mean| of the coarse window
+  std::vector<double> norm_scratch_;            // scratch of window_inverse_norms
+  std::vector<Eigen::Vector2d> shape_;          // the LK template's predicted places in the right image
+  std::vector<Eigen::Vector2d> shape_wide_[2];  // the same for the widening's steps, alternately
 };
 
 }  // namespace naneye::recon::scene
