@@ -132,12 +132,7 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
   luma_.right_spline.assign(np, 0.f);
-  final_ssr_quantile_ = -1;  // final_noise_false_reject 0: the ZNCC alone decides
-  if (s_.final_noise_false_reject > 0) {
-    const int side = 2 * s_.lk.radius + 1;
-    const double nu = side * side - 8;
-    final_ssr_quantile_ = nu * chi2_upper_ratio(nu, upper_normal_quantile(s_.final_noise_false_reject));
-  }
+  final_ssr_quantile_ = ssr_noise_bound(s_.lk.radius);
   luma_.left_search.assign(np, 0.f);
   luma_.right_search.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
@@ -305,7 +300,14 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
     return;
   }
   p.status = PointStatus::ok;
-  widen_steps(luma, f, xl, m.w, A0, lks, narrow, p.left_px, wc);
+  widen_steps(luma, f, xl, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wc);
+}
+
+double SparseReconstructor::ssr_noise_bound(int radius) const {
+  if (!(s_.final_noise_false_reject > 0)) return -1;  // 0: the ZNCC alone decides
+  const int side = 2 * radius + 1;
+  const double nu = side * side - 8;
+  return nu * chi2_upper_ratio(nu, upper_normal_quantile(s_.final_noise_false_reject));
 }
 
 bool SparseReconstructor::triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,

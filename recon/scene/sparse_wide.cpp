@@ -45,6 +45,8 @@ void SparseReconstructor::init_wide() {
   wide_kappa_[0] = noise_dof_factor(LkSettings{}.noise_kernel);
   wide_kappa_[1] = noise_dof_factor(LkSettings::binomial3());
   const int wide = std::max(s_.wide_radius, s_.lk.radius), side = 2 * wide + 1;
+  wide_ssr_quantile_.clear();
+  for (int r : wide_radii_) wide_ssr_quantile_.push_back(ssr_noise_bound(r));
   for (auto& shape : shape_wide_)
     shape.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
   wide_.reserve(static_cast<std::size_t>(s_.max_features));
@@ -86,7 +88,7 @@ void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int
 void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
                                       double w, const Eigen::Matrix2d& A0, const LkSettings& lks,
                                       const LkResult& narrow, const Eigen::Vector2d& left_px,
-                                      WideCandidate& wc) {
+                                      double noise_sigma_dn, WideCandidate& wc) {
   LkResult fits[2];  // this step's and the one before, alternately (as shape_wide_)
   const LkResult* inner = &narrow;
   const Eigen::Vector2d* inner_shape = shape_.data();
@@ -94,7 +96,7 @@ void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, 
     Eigen::Vector2d* shape = shape_wide_[k % 2].data();
     LkResult& fit = fits[k % 2];
     WideStep& st = wc.step[k];
-    fit = widen(luma, f, xl, w, A0, lks, k, *inner, inner_shape, shape, st.hausman);
+    fit = widen(luma, f, xl, w, A0, lks, k, *inner, inner_shape, shape, noise_sigma_dn, st.hausman);
     if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return;
     st.usable = true;
     st.right_px = fit.px;
@@ -107,7 +109,7 @@ void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, 
 LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
                                     double w, const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k,
                                     const LkResult& narrow, const Eigen::Vector2d* inner_shape,
-                                    Eigen::Vector2d* shape, double& hausman) {
+                                    Eigen::Vector2d* shape, double noise_sigma_dn, double& hausman) {
   hausman = -1;
   const int rn = k == 0 ? s_.lk.radius : wide_radii_[k - 1], rw = wide_radii_[k];
   if (!usable_wide_[k][0][static_cast<std::size_t>(f.v) * luma.width + f.u]) return {};
@@ -123,7 +125,10 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, co
   const LkResult wide =
       refine_affine(luma.left_view(), detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
                     usable_wide_[k][1].data(), narrow.px, A0, shape, wl, &narrow.A);
-  if (!wide.converged || wide.zncc < s_.min_final_zncc || !(narrow.ssr_dn2 > 0)) return {};
+  // The narrow window's acceptance (sparse.cpp): a ZNCC that high, or a residual the noise explains
+  // (faint texture: at the measured sensor the tube's wider windows failed the ZNCC alone).
+  const bool noise_left = wide.ssr_dn2 <= wide_ssr_quantile_[k] * 2 * noise_sigma_dn * noise_sigma_dn;
+  if (!wide.converged || (wide.zncc < s_.min_final_zncc && !noise_left) || !(narrow.ssr_dn2 > 0)) return {};
   const double nn = sn * sn, nw = sw * sw, e_ring = (nw - nn) * wide.noise_dof / nw, dof_n = narrow.noise_dof;
   if (!(dof_n > 0 && e_ring > 0)) return {};
   // The difference's covariance at the narrow window's residual variance (the wide one's would be

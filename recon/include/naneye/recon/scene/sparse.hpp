@@ -194,6 +194,9 @@ class SparseReconstructor {
              WideCandidate& wc);
   bool triangulate_match(const Eigen::Vector2d& left_px, const Eigen::Vector2d& right_px,
                          const Eigen::Matrix2d& cov_px, Eigen::Vector3d& X, double& depth_sigma_mm) const;
+  // The residual bound of a window of this radius within which its match's misfit is the noise
+  // alone, per unit 2 sigma_n^2 (final_noise_false_reject); < 0: off.
+  double ssr_noise_bound(int radius) const;
   // SparseSettings::max_depth_sigma_rel.
   bool precise(const Eigen::Vector3d& X, double depth_sigma_mm) const {
     return depth_sigma_mm <= s_.max_depth_sigma_rel * X.z();
@@ -205,7 +208,7 @@ class SparseReconstructor {
   // The nested widening of `narrow` (wide_radii_), into wc, until a step fails its own tests.
   void widen_steps(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
                    const Eigen::Matrix2d& A0, const LkSettings& lks, const LkResult& narrow,
-                   const Eigen::Vector2d& left_px, WideCandidate& wc);
+                   const Eigen::Vector2d& left_px, double noise_sigma_dn, WideCandidate& wc);
   // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
   // right image for a surface facing the camera at inverse depth w (exact model), relative to the
   // centre's place, row-major over the (2 rad + 1)^2 window.
@@ -216,7 +219,8 @@ class SparseReconstructor {
   // test's statistic (or -1).
   LkResult widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
                  const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k, const LkResult& narrow,
-                 const Eigen::Vector2d* inner_shape, Eigen::Vector2d* shape, double& hausman);
+                 const Eigen::Vector2d* inner_shape, Eigen::Vector2d* shape, double noise_sigma_dn,
+                 double& hausman);
 
   StereoRig rig_;
   std::optional<CalibrationUncertainty> calib_;  // empty: the calibration has no covariance
@@ -231,8 +235,10 @@ class SparseReconstructor {
   double wide_z_ = 0;              // upper normal quantile of wide_false_reject
   double wide_chi1_ = 0;           // chi-square(1) upper quantile of wide_false_reject
   double wide_kappa_[2] = {1, 1};  // noise_dof_factor: mono, Bayer
-  // The LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject; < 0: off).
+  // The LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject; < 0: off): the
+  // narrow window's, and each widening step's.
   double final_ssr_quantile_ = 0;
+  std::vector<double> wide_ssr_quantile_;
   std::vector<WideCandidate> wide_;       // per feature tried
   std::vector<int> cell_point_;           // per feature cell: its point's index, or -1
   std::vector<std::uint8_t> noise_mask_;  // left: 3x3 neighbourhood inside usable_search_[0]
