@@ -371,7 +371,12 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     // 21 x 21, so N - 8 had the 9 x 9's residual variance 0.7x too small, and the wider window's
     // tests (sparse_wide.cpp) refused most Bayer windows for it.
     const float* const x[8] = {ones, t, sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5]};
-    const Eigen::Matrix<double, 8, 8> xx = kernel_gram<8>(LkSettings{}.noise_kernel, x, side);
+    Eigen::Matrix<double, 8, 8> xx;  // the plain Gram, over the window's own pixels
+    double row[8];
+    for (int i = 0; i < 8; ++i) {
+      lk_dots::dot_many(x[i], 0.f, x + i + 1, 7 - i, n8, row);
+      for (int j = i; j < 8; ++j) xx(i, j) = xx(j, i) = row[j - i];
+    }
     const Eigen::Matrix<double, 8, 8> xcx = kernel_gram<8>(b, x, side) / b2;
     const double trace = xx.partialPivLu().solve(xcx).trace();
     if (trace > 8 && trace < n) out.noise_dof = n - trace;
