@@ -97,20 +97,22 @@ struct Tally {
   long inliers = 0;
   double z2_sum = 0;  // (dZ / sigma)^2 over the inliers given a sigma
   long z_count = 0;
-  void add(double z, const cv::Mat& truth, double u, double v, double sigma = NAN) {
+  // Returns (z - truth) / sigma for a good point given a sigma, else NaN.
+  double add(double z, const cv::Mat& truth, double u, double v, double sigma = NAN) {
     ++points;
     const int c = static_cast<int>(std::lround(u)), r = static_cast<int>(std::lround(v));
     const double zt = (c >= 0 && r >= 0 && c < truth.cols && r < truth.rows) ? truth.at<double>(r, c) : NAN;
     if (std::isnan(zt) || !(std::abs(z - zt) <= 0.05 * zt)) {
       ++outliers;
-      return;
+      return NAN;
     }
     rel_err_sum += std::abs(z - zt) / zt;
     ++inliers;
-    if (sigma > 0) {
-      z2_sum += (z - zt) * (z - zt) / (sigma * sigma);
-      ++z_count;
-    }
+    if (!(sigma > 0)) return NAN;
+    const double e = (z - zt) / sigma;
+    z2_sum += e * e;
+    ++z_count;
+    return e;
   }
   double p50() {
     std::sort(ms.begin(), ms.end());
@@ -448,13 +450,11 @@ int main(int argc, char** argv) {
       for (const auto& q : res.points) {
         ++st[static_cast<std::size_t>(q.status)];
         if (!q.valid()) continue;
-        a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y(), q.depth_sigma_mm);
-        const double zt = p.depth.at<double>(static_cast<int>(std::lround(q.left_px.y())),
-                                             static_cast<int>(std::lround(q.left_px.x())));
-        if (std::abs(q.X.z() - zt) <= 0.05 * zt) {  // a good point (NaN truth: not)
+        const double e = a.add(q.X.z(), p.depth, q.left_px.x(), q.left_px.y(), q.depth_sigma_mm);
+        if (std::isfinite(e)) {  // a good point
           WindowTally& w = wd[static_cast<std::size_t>(q.window_radius_px)];
           ++w.points;
-          w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+          w.z2 += e * e;
         }
       }
       opencv_path(rig, ours.luma(), p.depth, b);
