@@ -24,6 +24,18 @@ constexpr int kMaxN8 = lk_dots::padded(kMaxN);
 constexpr int kMaxStride = (kMaxSide + 2 + 3) / 4 * 4,
               kMaxGrown8 = lk_dots::padded((kMaxSide + 2) * kMaxStride);
 
+// sum_k v_i[k] v_j[k] over n8 floats (zero beyond the data): the triangle as dot products, mirrored.
+template <int K>
+Eigen::Matrix<double, K, K> dot_gram(const float* const (&v)[K], int n8) {
+  Eigen::Matrix<double, K, K> out;
+  double row[K];
+  for (int i = 0; i < K; ++i) {
+    lk_dots::dot_many(v[i], 0.f, v + i + 1, K - 1 - i, n8, row);
+    for (int j = i; j < K; ++j) out(i, j) = out(j, i) = row[j - i];
+  }
+  return out;
+}
+
 // sum_p (b * v)_p (b * v)_p^T over the window grown by one pixel (the kernel's reach) for the
 // K-vectors v = (v_0, .., v_K-1) per pixel of the side x side window (zero outside it), each v_i an
 // image over the window, row-major: the noise of weighted sums of the pixels under the pair's 3 x 3
@@ -50,15 +62,9 @@ Eigen::Matrix<double, K, K> kernel_gram(const std::array<float, 9>& b, const flo
       }
     for (int k = g * stride; k < n8; ++k) f[e][k] = 0.f;
   }
-  Eigen::Matrix<double, K, K> out;
-  double row[K];
-  for (int i = 0; i < K; ++i) {
-    const float* rest[K];
-    for (int j = i + 1; j < K; ++j) rest[j - i - 1] = f[j];
-    lk_dots::dot_many(f[i], 0.f, rest, K - 1 - i, n8, row);
-    for (int j = i; j < K; ++j) out(i, j) = out(j, i) = row[j - i];
-  }
-  return out;
+  const float* filtered[K];
+  for (int e = 0; e < K; ++e) filtered[e] = f[e];
+  return dot_gram<K>(filtered, n8);
 }
 
 // The translation's noise: kernel_gram over the steepest-descent vectors projected onto it first
@@ -371,12 +377,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     // 21 x 21, so N - 8 had the 9 x 9's residual variance 0.7x too small, and the wider window's
     // tests (sparse_wide.cpp) refused most Bayer windows for it.
     const float* const x[8] = {ones, t, sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5]};
-    Eigen::Matrix<double, 8, 8> xx;  // the plain Gram, over the window's own pixels
-    double row[8];
-    for (int i = 0; i < 8; ++i) {
-      lk_dots::dot_many(x[i], 0.f, x + i + 1, 7 - i, n8, row);
-      for (int j = i; j < 8; ++j) xx(i, j) = xx(j, i) = row[j - i];
-    }
+    const Eigen::Matrix<double, 8, 8> xx = dot_gram<8>(x, n8);  // over the window's own pixels
     const Eigen::Matrix<double, 8, 8> xcx = kernel_gram<8>(b, x, side) / b2;
     const double trace = xx.partialPivLu().solve(xcx).trace();
     if (trace > 8 && trace < n) out.noise_dof = n - trace;
