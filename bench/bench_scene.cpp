@@ -9,7 +9,7 @@
 //   build/bench/bench_scene [--seeds N] [--repeat N] [--bayer] [--real-sensor] [--defocus SIGMA]
 //       [--refusals] [--digest] [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z]
 //       [--raw-search] [--wide-radius R] [--wide-step S] [--dense-radius R] [--max-radius R]
-//       [--dense-iterations N]
+//       [--dense-iterations N] [--gain E_PER_DN] [--read-noise DN] [--no-vignetting] [--supersample N]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
 // features per pair by status. What-ifs, one setting changed: --residual-p P, --max-sigma PX, the
@@ -25,6 +25,9 @@
 // to pair, and from scene to scene: one matcher for the run, as in the daemon).
 // --defocus SIGMA: the renders' defocus blur, px (sim/sensor.hpp; default 0.35, with diffraction
 // 0.41 px in all: ~3x sharper than a real NanEye's edges, 1.0-1.6 px, ../shared/notes/measurements.md).
+// The error budget's sensor terms, one at a time: --gain E_PER_DN (shot noise; 1e6: none) and
+// --read-noise DN (sim/sensor.hpp), --no-vignetting, --supersample N (the renderer's sub-samples per
+// pixel side, default 3), beside --no-noise, --no-fixed-pattern and --no-offsets below.
 // --repeat N: each path reconstructs every render N times, all timed (steadier medians; a profile
 // of the paths rather than of the renderer under perf). The sparse ids then follow the repeats.
 // --digest: per scene, one 64-bit FNV-1a hash over every render's sparse points (status, id, both
@@ -353,6 +356,7 @@ int main(int argc, char** argv) {
   int repeat = 1;  // reconstructions timed per render: > 1 for perf and steadier times
   bool bayer = false, refusals = false, digest = false;
   int pattern_frames = 0;
+  int supersample = 3;  // the renderer's default (sim/textured.hpp)
   recon::scene::DenseSettings ds;
   recon::scene::SparseSettings ss;
   sim::SensorSettings sensor;
@@ -386,6 +390,10 @@ int main(int argc, char** argv) {
       sensor.reset_rows = 0;
     }
     if (!std::strcmp(argv[i], "--no-noise")) sensor.noise = false;
+    if (!std::strcmp(argv[i], "--no-vignetting")) sensor.vignetting = false;
+    if (!std::strcmp(argv[i], "--gain") && i + 1 < argc) sensor.gain_e_per_dn = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--read-noise") && i + 1 < argc) sensor.read_noise_dn = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--supersample") && i + 1 < argc) supersample = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--no-offsets")) sensor.column_fpn_dn = sensor.dsnu_dn = 0.0;
     // The fixed pattern measured from N dark and N flat frames and removed from every render before
     // both paths (docs/sensor-calibration.md): what a user who calibrated the sensor gets.
@@ -395,7 +403,7 @@ int main(int argc, char** argv) {
   const recon::StereoRig rig =
       recon::load_rig(std::filesystem::path(NANEYE_SOURCE_DIR) / "config/calib/paper-d3.yaml");
   sensor.bayer = bayer;
-  const sim::TexturedRenderer renderer(rig, sensor);
+  const sim::TexturedRenderer renderer(rig, sensor, supersample);
   // A flat at 0.7 of white: ~530 DN of signal at the centre, ~320 at the corners.
   const recon::StereoFixedPattern pattern =
       pattern_frames > 0 ? sim::measure_fixed_pattern(sensor, pattern_frames, 0.7, 0xF1A7)
