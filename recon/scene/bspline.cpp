@@ -6,6 +6,7 @@
 #include "naneye/recon/scene/bspline.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <opencv2/core.hpp>
@@ -106,6 +107,47 @@ void bspline_coefficients(const GrayView& in, const ActiveRect& a, float* out, f
     const int from = a.row_begin + mirror(r - a.row_begin, rows);
     std::copy_n(out + static_cast<std::ptrdiff_t>(from) * w, w, out + static_cast<std::ptrdiff_t>(r) * w);
   }
+}
+
+double bspline_noise_autocorrelation(double f, int lag) {
+  constexpr int kSteps = 256, kReach = 24;  // |z1|^24 ~ 2e-14: the cardinal spline's taps beyond are 0
+  using Table = std::array<std::array<double, kSteps + 1>, kNoiseLagReach + 1>;
+  // Immutable after its first use (a function-local static: built once, thread-safe).
+  static const Table table = [] {
+    const double z = std::sqrt(3.0) - 2.0;
+    const auto h = [z](int k) { return std::sqrt(3.0) * std::pow(z, std::abs(k)); };
+    const auto beta3 = [](double x) {
+      x = std::abs(x);
+      return x < 1 ? 2.0 / 3.0 - x * x + 0.5 * x * x * x : x < 2 ? (2 - x) * (2 - x) * (2 - x) / 6 : 0.0;
+    };
+    // eta(x) = sum_k h_k beta3(x - k): only the four k with |x - k| < 2.
+    const auto eta = [&](double x) {
+      const int k0 = static_cast<int>(std::floor(x)) - 1;
+      double v = 0;
+      for (int k = k0; k <= k0 + 3; ++k) v += h(k) * beta3(x - k);
+      return v;
+    };
+    Table t{};
+    for (int i = 0; i <= kSteps; ++i) {
+      const double fi = static_cast<double>(i) / kSteps;
+      double taps[2 * kReach + 1 + kNoiseLagReach];
+      for (int j = -kReach; j <= kReach + kNoiseLagReach; ++j) taps[j + kReach] = eta(fi + j);
+      for (int l = 0; l <= kNoiseLagReach; ++l) {
+        double sum = 0;
+        for (int j = 0; j < 2 * kReach + 1; ++j) sum += taps[j] * taps[j + l];
+        t[static_cast<std::size_t>(l)][static_cast<std::size_t>(i)] = sum;
+      }
+    }
+    return t;
+  }();
+  lag = std::abs(lag);
+  if (lag > kNoiseLagReach)
+    throw std::invalid_argument("bspline_noise_autocorrelation: lag beyond the table");
+  const double x = std::clamp(f, 0.0, 1.0) * kSteps;
+  const int i = std::min(static_cast<int>(x), kSteps - 1);
+  const auto& row = table[static_cast<std::size_t>(lag)];
+  return row[static_cast<std::size_t>(i)] +
+         (x - i) * (row[static_cast<std::size_t>(i) + 1] - row[static_cast<std::size_t>(i)]);
 }
 
 double bspline_knot_derivative_tap(int k) {

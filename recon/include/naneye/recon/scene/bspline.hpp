@@ -38,4 +38,14 @@ void bspline_coefficients_line(const float* in, int n, float* out);
 inline constexpr int kKnotDerivativeReach = 12;
 double bspline_knot_derivative_tap(int k);
 
+// What the interpolant does to white noise in the samples: along one axis a value at fractional
+// offset f (0 <= f < 1) past a sample is sum_j eta(f + j) x_j, eta the cardinal cubic spline
+// (eta(k) = delta_k; eta = sum_k h_k beta3(. - k), h as above), so the noise of values taken at one
+// offset f on the whole grid has the autocorrelation, per unit of the samples' variance,
+// R_f(lag) = sum_j eta(f + j) eta(f + j + lag). R_f(0), the variance's gain, is 1 at f = 0 and
+// 0.756 at f = 1/2; sum over lags of R_f is 1 (eta sums to 1). Lags 0 .. kNoiseLagReach, from a
+// table at 1/256 (linear between entries: ~1e-6). In 2-D the interpolant is the product of the axes'.
+inline constexpr int kNoiseLagReach = 2;
+double bspline_noise_autocorrelation(double f, int lag);
+
 }  // namespace naneye::recon::scene
