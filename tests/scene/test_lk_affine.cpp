@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -194,6 +195,53 @@ TEST(LkAffine, ResidualDegreesOfFreedomAreTheResidualsExpectation) {
         EXPECT_EQ(sc.noise_dof, n - 8);
       }
     }
+}
+
+// What the residual variance misses (2026-12-07, docs/scene.md "The interpolant's share of the noise"):
+// the target's B-spline interpolant smooths the right eye's noise by a share that depends on the
+// fractional shift (bspline_noise_autocorrelation: the variance's gain g = R_fx(0) R_fy(0), 0.57 at
+// half a pixel both ways), so E[SSR] = s^2 ((N - 8) - N (1 - g) / 2) for the two eyes' per-pixel
+// variance s^2 (the right eye's half smoothed), while the match, a sum weighted by the smooth
+// steepest-descent images, keeps nearly all of that eye's noise. refine_affine divides by N - 8, so
+// its covariance falls short by the ratio of the two, and by more the nearer the shift is to half a
+// pixel. On the same textures and noise draws: measured / predicted variance 1.01 / 1.12 / 1.26 at
+// whole, quarter and half-pixel shifts (9 x 9), the shift-dependent part that ratio explains (what is
+// left, 1.01 / 0.97 / 0.96, was there at whole pixels). The sparse path does not take this share yet: its
+// wider windows' tests lean on the shortfall (docs/scene.md). This test pins the finding down; when
+// refine_affine takes the share, the first ratios turn flat and it has to change with it.
+TEST(LkAffine, ResidualVarianceMissesTheInterpolantsShareOfTheRightEyesNoise) {
+  const double sd = 2.0;
+  const LkSettings s;  // 9 x 9, white
+  const int n = 81;
+  double ratio[3], explained[3];
+  for (int i = 0; i < 3; ++i) {
+    const double frac = 0.25 * i;
+    const double g = bspline_noise_autocorrelation(frac, 0) * bspline_noise_autocorrelation(frac, 0);
+    const double dof = (n - 8) - 0.5 * n * (1 - g);
+    double measured = 0, predicted = 0, ssr = 0;
+    int fits = 0;
+    for (unsigned seed = 1; seed <= 6; ++seed) {
+      const Scatter sc = scatter(s, 100, seed, sd, Eigen::Vector2d(3 + frac, -2 + frac));
+      ASSERT_GE(sc.converged, 99);
+      measured += sc.measured;
+      predicted += sc.predicted;
+      ssr += sc.ssr_dn2 * sc.converged;
+      fits += sc.converged;
+    }
+    const double e_ssr = ssr / fits / (2 * sd * sd);
+    ratio[i] = measured / predicted;
+    explained[i] = ratio[i] * dof / (n - 8);
+    std::printf(
+        "shift +%.2f  E[SSR] / s^2 %.1f  (N - 8) - N (1 - g) / 2 = %.1f  measured / predicted variance %.3f,"
+        " less the share %.3f\n",
+        frac, e_ssr, dof, ratio[i], explained[i]);
+    // 600 fits: E[SSR]'s own spread ~0.5 %.
+    EXPECT_NEAR(e_ssr / dof, 1.0, 0.04) << frac;
+  }
+  EXPECT_GT(ratio[2] / ratio[0], 1.15);  // the shortfall grows towards half a pixel
+  // The share explains it: what is left does not depend on the shift.
+  // Measured 1.05 (1.24 without the share).
+  EXPECT_LT(*std::max_element(explained, explained + 3) / *std::min_element(explained, explained + 3), 1.08);
 }
 
 // Without noise the result should be the shift itself, at every fractional shift. The target is
