@@ -314,10 +314,11 @@ void print_refusals(const std::vector<recon::scene::MatchCounts>& rows) {
 // The sparse path's features per pair by their status (sparse.hpp PointStatus), per scene.
 constexpr int kStatuses = static_cast<int>(recon::scene::PointStatus::imprecise) + 1;
 using StatusRow = std::array<long, kStatuses>;
-// Per LK window radius (ScenePoint::window_radius_px): good points, and their sum of (dZ / sigma)^2.
+// Per LK window radius (ScenePoint::window_radius_px): good points, and their sums of dZ / sigma (its
+// mean shows a bias the rms hides: a curved surface's, of its sign) and of its square.
 struct WindowTally {
   long points = 0;
-  double z2 = 0;
+  double z = 0, z2 = 0;  // sums of dZ / sigma (signed: a bias shows) and of its square
 };
 using WidenedRow = std::array<WindowTally, recon::scene::kMaxLkRadius + 1>;
 
@@ -337,18 +338,20 @@ void print_sparse_refusals(const std::vector<StatusRow>& rows, const std::vector
   std::vector<int> radii{ss.lk.radius};
   radii.insert(radii.end(), wide_radii.begin(), wide_radii.end());
   std::printf("\n%-10s |", "window");
-  for (int r : radii) std::printf(" %6dx%-6d", 2 * r + 1, 2 * r + 1);
+  for (int r : radii) std::printf(" %7dx%-12d", 2 * r + 1, 2 * r + 1);
   std::printf("\n");
   for (std::size_t k = 0; k < widened.size(); ++k) {
     std::printf("%-10s |", sim::textured_preset_names()[k].c_str());
     for (int r : radii) {
       const WindowTally& w = widened[k][static_cast<std::size_t>(r)];
-      std::printf(" %6.1f %6.2f", double(w.points) / seeds, std::sqrt(w.z2 / std::max(1L, w.points)));
+      const double m = static_cast<double>(std::max(1L, w.points));
+      std::printf(" %6.1f %6.2f %+6.2f", double(w.points) / seeds, std::sqrt(w.z2 / m), w.z / m);
     }
     std::printf("\n");
   }
   std::printf(
-      "good sparse points per pair by the LK window their match came from (side, px), and their rms(e/s)\n");
+      "good sparse points per pair by the LK window their match came from (side, px), their rms(e/s) and "
+      "mean(e/s)\n");
 }
 
 int main(int argc, char** argv) {
@@ -462,6 +465,7 @@ int main(int argc, char** argv) {
         if (std::isfinite(e)) {  // a good point
           WindowTally& w = wd[static_cast<std::size_t>(q.window_radius_px)];
           ++w.points;
+          w.z += e;
           w.z2 += e * e;
         }
       }
