@@ -197,7 +197,7 @@ TEST(LkAffine, ResidualDegreesOfFreedomAreTheResidualsExpectation) {
     }
 }
 
-// What the residual variance misses (2026-12-07, docs/scene.md "The interpolant's share of the noise"):
+// What the residual variance misses (2026-12-07, docs/scene.md "Why the measured planes stop at 9 x 9"):
 // the target's B-spline interpolant smooths the right eye's noise by a share that depends on the
 // fractional shift (bspline_noise_autocorrelation: the variance's gain g = R_fx(0) R_fy(0), 0.57 at
 // half a pixel both ways), so E[SSR] = s^2 ((N - 8) - N (1 - g) / 2) for the two eyes' per-pixel
