@@ -64,6 +64,12 @@ void filter_columns(float* p, int rows, int cols, std::ptrdiff_t stride) {
              [](auto cur, auto next) { return kPole * (next - cur); });
 }
 
+// The prefilter's impulse response h_k = sqrt(3) z1^|k| (the coefficients of a unit sample; Unser
+// 1999, Box 2), in double: the interpolant's analysis below builds on it.
+double prefilter_tap(int k) {
+  return std::sqrt(3.0) * std::pow(std::sqrt(3.0) - 2.0, std::abs(k));
+}
+
 }  // namespace
 
 void bspline_coefficients_line(const float* in, int n, float* out) {
@@ -114,8 +120,6 @@ double bspline_noise_autocorrelation(double f, int lag) {
   using Table = std::array<std::array<double, kSteps + 1>, kNoiseLagReach + 1>;
   // Immutable after its first use (a function-local static: built once, thread-safe).
   static const Table table = [] {
-    const double z = std::sqrt(3.0) - 2.0;
-    const auto h = [z](int k) { return std::sqrt(3.0) * std::pow(z, std::abs(k)); };
     const auto beta3 = [](double x) {
       x = std::abs(x);
       return x < 1 ? 2.0 / 3.0 - x * x + 0.5 * x * x * x : x < 2 ? (2 - x) * (2 - x) * (2 - x) / 6 : 0.0;
@@ -124,7 +128,7 @@ double bspline_noise_autocorrelation(double f, int lag) {
     const auto eta = [&](double x) {
       const int k0 = static_cast<int>(std::floor(x)) - 1;
       double v = 0;
-      for (int k = k0; k <= k0 + 3; ++k) v += h(k) * beta3(x - k);
+      for (int k = k0; k <= k0 + 3; ++k) v += prefilter_tap(k) * beta3(x - k);
       return v;
     };
     Table t{};
@@ -152,9 +156,7 @@ double bspline_noise_autocorrelation(double f, int lag) {
 
 double bspline_knot_derivative_tap(int k) {
   if (k == 0 || std::abs(k) > kKnotDerivativeReach) return 0.0;
-  const double z = std::sqrt(3.0) - 2.0;
-  const auto h = [z](int j) { return std::sqrt(3.0) * std::pow(z, std::abs(j)); };
-  return 0.5 * (h(k - 1) - h(k + 1));
+  return 0.5 * (prefilter_tap(k - 1) - prefilter_tap(k + 1));
 }
 
 }  // namespace naneye::recon::scene

@@ -212,7 +212,7 @@ TEST(LkAffine, ResidualDegreesOfFreedomAreTheResidualsExpectation) {
 TEST(LkAffine, ResidualVarianceMissesTheInterpolantsShareOfTheRightEyesNoise) {
   const double sd = 2.0;
   const LkSettings s;  // 9 x 9, white
-  const int n = 81;
+  const int n = (2 * s.radius + 1) * (2 * s.radius + 1);
   double ratio[3], explained[3];
   for (int i = 0; i < 3; ++i) {
     const double frac = 0.25 * i;
