@@ -408,6 +408,35 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   }
   const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * PBP;
   out.cov = out.A * cov_t * out.A.transpose();
+  if (s.curvature_gain) {
+    // sum_k sd_k r_k for the residual r_k = g_k[c] m_k a displacement along axis c gives, less what
+    // the window's normalisation (zero mean, unit norm: the regressors `ones` and t) takes of it:
+    // r - mean(r) - t (t . r). Without that the 9 x 9's predicted shift was 35 % short
+    // (LkAffine.CurvatureGain*). The products g_k[c] m_k as six images, each against the six
+    // steepest-descent images, the window and the template.
+    // The fixed point's sensitivity to such an r is (SD^T Pi SD)^-1 SD^T Pi r, Pi that same
+    // projection: on a window whose texture is a ramp the template correlates with its own steepest
+    // descent and H alone was 5x off (LkAffine.CurvatureGain*, texture of twice the wavelength).
+    SpdFactor<6> projected;
+    if (!projected.factor(Hs - sd_sum * sd_sum.transpose() / n - sd_t * sd_t.transpose() / tt))
+      return LkResult{};
+    const Eigen::Matrix<double, 2, 6> Pp = translation_rows(projected);
+    alignas(32) float gm[kMaxN8];
+    const float* const rows[8] = {sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5], ones, t};
+    for (int m = 0; m < 3; ++m)
+      for (int c = 0; c < 2; ++c) {
+        const float* g = sdf[4 + c];  // the gradient in q: sd's translation images
+        for (int dr = -rad, k = 0; dr <= rad; ++dr)
+          for (int dc = -rad; dc <= rad; ++dc, ++k)
+            gm[k] = g[k] * static_cast<float>(m == 0 ? 0.5 * dc * dc : m == 1 ? dc * dr : 0.5 * dr * dr);
+        std::fill(gm + n, gm + n8, 0.f);
+        double r[9];
+        lk_dots::dot_many(gm, 0.f, rows, 8, n8, r);
+        const Eigen::Matrix<double, 6, 1> sum =
+            Eigen::Map<const Eigen::Matrix<double, 6, 1>>(r + 1) - sd_sum * (r[7] / n) - sd_t * (r[8] / tt);
+        out.curvature_gain[static_cast<std::size_t>(m)].col(c) = out.A * (Pp * sum);
+      }
+  }
   if (s.inner_radius > 0) {
     // Linearised, each fit's translation is a weighted sum of the residuals: H^-1 sum_k sd_k e_k, the
     // inner fit's over its own pixels. Their difference is sum_k g_k e_k, whose covariance is the

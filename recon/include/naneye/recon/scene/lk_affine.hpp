@@ -29,6 +29,9 @@ struct LkSettings {
   // px; > 0: the result also reports the SSR of the pixels farther than this from the centre
   // (Chebyshev distance), the ring a wider window adds to a narrower one (sparse.cpp's window test).
   int inner_radius = 0;
+  // true: the result also reports LkResult::curvature_gain (the sparse path's curvature model,
+  // sparse_curvature.cpp), 36 more dot products per fit.
+  bool curvature_gain = false;
   static std::array<float, 9> binomial3() {
     return {1 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 4 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 1 / 16.f};
   }
@@ -51,6 +54,14 @@ struct LkResult {
   // by template_ss_dn2), px^2; and the template's sum of squared deviations, DN^2.
   Eigen::Matrix2d diff_cov_unit = Eigen::Matrix2d::Zero();
   double template_ss_dn2 = 0;
+  // With LkSettings::curvature_gain: how far px moves when the target's displacement has a part
+  // beyond the affine, d_k = 1/2 (q_k^T Q q_k) v at template offset q_k = (dc, dr) (a surface's
+  // curvature: Q symmetric, px / px^2; v a direction in the target, px): by
+  // sum_m Q_m curvature_gain[m] v over m = (xx, xy, yy). Linearised (the Gauss-Newton fixed point's
+  // sensitivity to a residual g_k . d_k): A P_t sum_k sd_k g_k^T (1/2 dc^2, dc dr, 1/2 dr^2)_m,
+  // P_t the translation's rows of the solve, g_k the template's gradient in the warp's domain.
+  std::array<Eigen::Matrix2d, 3> curvature_gain{Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero(),
+                                                Eigen::Matrix2d::Zero()};
   int iterations = 0;
 };
 
