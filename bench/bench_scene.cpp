@@ -357,7 +357,7 @@ void print_sparse_refusals(const std::vector<StatusRow>& rows, const std::vector
 int main(int argc, char** argv) {
   int seeds = 3;
   int repeat = 1;  // reconstructions timed per render: > 1 for perf and steadier times
-  bool bayer = false, refusals = false, digest = false;
+  bool bayer = false, refusals = false, digest = false, sparse_only = false;
   int pattern_frames = 0;
   int supersample = 3;  // the renderer's default (sim/textured.hpp)
   recon::scene::DenseSettings ds;
@@ -371,6 +371,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--bayer")) bayer = true;
     if (!std::strcmp(argv[i], "--refusals")) refusals = true;
     if (!std::strcmp(argv[i], "--digest")) digest = true;
+    // The sparse paths alone (ours and OpenCV's), for a quicker turn on a sparse question.
+    if (!std::strcmp(argv[i], "--sparse-only")) sparse_only = true;
     // What-if: one validity test loosened, to see what the pixels it refuses would give.
     if (!std::strcmp(argv[i], "--residual-p") && i + 1 < argc) ds.matcher.residual_p = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--max-sigma") && i + 1 < argc) ds.matcher.max_sigma_px = std::atof(argv[++i]);
@@ -379,6 +381,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--min-final-zncc") && i + 1 < argc) ss.min_final_zncc = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-step") && i + 1 < argc) ss.wide_step = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--curvature-radius") && i + 1 < argc)
+      ss.curvature_radius_px = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--dense-radius") && i + 1 < argc)
       ds.matcher.radius = ds.matcher.max_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--max-radius") && i + 1 < argc) ds.matcher.max_radius = std::atoi(argv[++i]);
@@ -470,6 +474,7 @@ int main(int argc, char** argv) {
         }
       }
       opencv_path(rig, ours.luma(), p.depth, b);
+      if (sparse_only) continue;
       // Dense on the luminance the sparse path made (the daemon shares it the same way).
       for (int k = 0; k < repeat; ++k) {
         const double t1 = thread_cpu_s();
@@ -506,36 +511,41 @@ int main(int argc, char** argv) {
   std::printf(
       "pts/good: points per pair, all and within 5 %% of the truth where both eyes see it; outl: the "
       "rest; err: mean |dZ|/Z of the good ones\n\n");
-  std::printf("%-10s | %-50s | %-50s\n", "", "ours (dense)", "OpenCV dense path");
-  std::printf("%-10s | %7s %7s %8s %8s %8s %8s | %7s %7s %8s %8s %8s %8s\n", "scene", "p50 ms", "pix",
-              "cover %", "unseen %", "err %", "bad-5 %", "p50 ms", "pix", "cover %", "unseen %", "err %",
-              "bad-5 %");
-  for (std::size_t k = 0; k < dense_rows.size(); ++k) {
-    auto row = [&](DenseTally& t) {
-      std::printf(" %7.2f %7.0f %7.1f%% %7.2f%% %7.2f%% %7.2f%%", t.p50(), double(t.valid) / seeds,
-                  100.0 * t.covered / std::max(1L, t.truth), 100.0 * t.unseen / std::max(1L, t.valid),
-                  100.0 * t.rel_sum / std::max(1L, t.covered), 100.0 * t.bad5 / std::max(1L, t.covered));
-    };
-    std::printf("%-10s |", sim::textured_preset_names()[k].c_str());
-    row(dense_rows[k].first);
-    std::printf(" |");
-    row(dense_rows[k].second);
-    std::printf(" | r %s | band %s\n", dense_rows[k].first.radii.c_str(), dense_rows[k].first.bands.c_str());
+  for (std::size_t k = 0; sparse_only && k < dense_rows.size(); ++k) dense_rows[k] = {};
+  if (!sparse_only) {
+    std::printf("%-10s | %-50s | %-50s\n", "", "ours (dense)", "OpenCV dense path");
+    std::printf("%-10s | %7s %7s %8s %8s %8s %8s | %7s %7s %8s %8s %8s %8s\n", "scene", "p50 ms", "pix",
+                "cover %", "unseen %", "err %", "bad-5 %", "p50 ms", "pix", "cover %", "unseen %", "err %",
+                "bad-5 %");
+    for (std::size_t k = 0; k < dense_rows.size(); ++k) {
+      auto row = [&](DenseTally& t) {
+        std::printf(" %7.2f %7.0f %7.1f%% %7.2f%% %7.2f%% %7.2f%%", t.p50(), double(t.valid) / seeds,
+                    100.0 * t.covered / std::max(1L, t.truth), 100.0 * t.unseen / std::max(1L, t.valid),
+                    100.0 * t.rel_sum / std::max(1L, t.covered), 100.0 * t.bad5 / std::max(1L, t.covered));
+      };
+      std::printf("%-10s |", sim::textured_preset_names()[k].c_str());
+      row(dense_rows[k].first);
+      std::printf(" |");
+      row(dense_rows[k].second);
+      std::printf(" | r %s | band %s\n", dense_rows[k].first.radii.c_str(),
+                  dense_rows[k].first.bands.c_str());
+    }
+    std::printf(
+        "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
+        "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our "
+        "window "
+        "radius per pair, px; band: the SGM's disparities per pair, first + count (px)\n");
+    std::printf("\n%-10s | %9s | %-17s | %-17s\n", "same pixels", "", "ours (dense)", "OpenCV dense path");
+    std::printf("%-10s | %9s | %8s %8s | %8s %8s\n", "scene", "pix", "err %", "bad-5 %", "err %", "bad-5 %");
+    for (std::size_t k = 0; k < common_rows.size(); ++k) {
+      const CommonTally& c = common_rows[k];
+      const double n = static_cast<double>(std::max(1L, c.pix));
+      std::printf("%-10s | %9.0f | %7.2f%% %7.2f%% | %7.2f%% %7.2f%%\n",
+                  sim::textured_preset_names()[k].c_str(), c.pix / static_cast<double>(seeds),
+                  100 * c.rel_ours / n, 100 * c.bad_ours / n, 100 * c.rel_cv / n, 100 * c.bad_cv / n);
+    }
+    std::printf("the pixels both dense paths give a depth where the truth has one, per pair\n");
   }
-  std::printf(
-      "pix: pixels with depth per pair; cover: of the pixels where both eyes see the surface; unseen: "
-      "depths where the truth has none, of all given; err: mean |dZ|/Z; bad-5: |dZ|/Z > 5 %%; r: our window "
-      "radius per pair, px; band: the SGM's disparities per pair, first + count (px)\n");
-  std::printf("\n%-10s | %9s | %-17s | %-17s\n", "same pixels", "", "ours (dense)", "OpenCV dense path");
-  std::printf("%-10s | %9s | %8s %8s | %8s %8s\n", "scene", "pix", "err %", "bad-5 %", "err %", "bad-5 %");
-  for (std::size_t k = 0; k < common_rows.size(); ++k) {
-    const CommonTally& c = common_rows[k];
-    const double n = static_cast<double>(std::max(1L, c.pix));
-    std::printf("%-10s | %9.0f | %7.2f%% %7.2f%% | %7.2f%% %7.2f%%\n",
-                sim::textured_preset_names()[k].c_str(), c.pix / static_cast<double>(seeds),
-                100 * c.rel_ours / n, 100 * c.bad_ours / n, 100 * c.rel_cv / n, 100 * c.bad_cv / n);
-  }
-  std::printf("the pixels both dense paths give a depth where the truth has one, per pair\n");
   if (digest)
     for (std::size_t k = 0; k < digests.size(); ++k)
       std::printf("digest %-10s sparse %016llx dense %016llx\n", sim::textured_preset_names()[k].c_str(),

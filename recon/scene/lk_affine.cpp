@@ -9,6 +9,7 @@
 #include "../corners/simd.hpp"
 #include "lk_dots.hpp"
 #include "lk_sample.hpp"
+#include "naneye/recon/scene/bspline.hpp"
 #include "round.hpp"
 #include "spd_factor.hpp"
 
@@ -382,6 +383,45 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
     const double trace = xx.partialPivLu().solve(xcx).trace();
     if (trace > 8 && trace < n) out.noise_dof = n - trace;
   }
+  // The target's interpolant smooths the right eye's noise (bspline_noise_autocorrelation): at a
+  // sample whose place has fractional parts (fx, fy) its variance is g = sum over lags of
+  // R_fx(lx) R_fy(ly) rho(lx, ly) of the noise's own (rho: the kernel's autocorrelation; white:
+  // R_fx(0) R_fy(0), 0.57 at half a pixel both ways) instead of 1. The residual holds the two eyes'
+  // noise evenly, so E[SSR] loses sum_k (1 - g_k) / 2 of its degrees of freedom, while the match (a
+  // sum over smooth steepest-descent images, which interpolation leaves nearly as they are) keeps
+  // all of it: without this, SSR / dof read the noise 0-26 % short by the fractional shift
+  // (LkAffine.ResidualVariance*, docs/scene.md "the interpolant's share"). Every third row and
+  // column: the places move smoothly over the window.
+  {
+    double rho[2 * kNoiseLagReach + 1][2 * kNoiseLagReach + 1] = {};
+    for (int i = 0; i < 9; ++i)
+      for (int j = 0; j < 9; ++j) rho[j / 3 - i / 3 + 2][j % 3 - i % 3 + 2] += double(b[i]) * b[j] / b2;
+    double lost = 0;
+    int sampled = 0;
+    for (int dr = -rad; dr <= rad; dr += 3)
+      for (int dc = -rad; dc <= rad; dc += 3) {
+        const int k = (dr + rad) * side + dc + rad;
+        const double x = M(0, 0) * qx[k] + M(0, 1) * qy[k] + M(0, 2),
+                     y = M(1, 0) * qx[k] + M(1, 1) * qy[k] + M(1, 2);
+        const double fx = x - std::floor(x), fy = y - std::floor(y);
+        double g;
+        if (white) {
+          g = bspline_noise_autocorrelation(fx, 0) * bspline_noise_autocorrelation(fy, 0);
+        } else {
+          double rx[2 * kNoiseLagReach + 1], ry[2 * kNoiseLagReach + 1];
+          for (int l = -kNoiseLagReach; l <= kNoiseLagReach; ++l) {
+            rx[l + kNoiseLagReach] = bspline_noise_autocorrelation(fx, l);
+            ry[l + kNoiseLagReach] = bspline_noise_autocorrelation(fy, l);
+          }
+          g = 0;
+          for (int ly = 0; ly <= 2 * kNoiseLagReach; ++ly)
+            for (int lx = 0; lx <= 2 * kNoiseLagReach; ++lx) g += ry[ly] * rx[lx] * rho[ly][lx];
+        }
+        lost += 1 - g;
+        ++sampled;
+      }
+    out.noise_dof -= 0.5 * lost * n / sampled;
+  }
   const double s2 = ssr / out.noise_dof;
   // Errors in variables (Fuller, "Measurement Error Models", 1987, Sec. 1.1): the steepest-descent
   // images are the noisy template's gradients, so H = sum sd sd^T holds their noise too, and the
@@ -408,28 +448,34 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   }
   const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * PBP;
   out.cov = out.A * cov_t * out.A.transpose();
-  if (s.curvature_gain) {
-    // sum_k sd_k r_k for the residual r_k = g_k[c] m_k a displacement along axis c gives, less what
-    // the window's normalisation (zero mean, unit norm: the regressors `ones` and t) takes of it:
-    // r - mean(r) - t (t . r). Without that the 9 x 9's predicted shift was 35 % short
-    // (LkAffine.CurvatureGain*). The products g_k[c] m_k as six images, each against the six
-    // steepest-descent images, the window and the template.
-    // The fixed point's sensitivity to such an r is (SD^T Pi SD)^-1 SD^T Pi r, Pi that same
-    // projection: on a window whose texture is a ramp the template correlates with its own steepest
-    // descent and H alone was 5x off (LkAffine.CurvatureGain*, texture of twice the wavelength).
-    SpdFactor<6> projected;
-    if (!projected.factor(Hs - sd_sum * sd_sum.transpose() / n - sd_t * sd_t.transpose() / tt))
-      return LkResult{};
+  // With curvature_gain: sum_k sd_k r_k for the residual r_k = g_k[c] m_k a displacement along axis c gives,
+  // less what the window's normalisation (zero mean, unit norm: the regressors `ones` and t) takes of it: r -
+  // mean(r) - t (t . r). Without that the 9 x 9's predicted shift was 35 % short (LkAffine.CurvatureGain*).
+  // The products g_k[c] m_k as six images, each against the six steepest-descent images, the window and the
+  // template. The fixed point's sensitivity to such an r is (SD^T Pi SD)^-1 SD^T Pi r, Pi that same
+  // projection: on a window whose texture is a ramp the template correlates with its own steepest
+  // descent and H alone was 5x off (LkAffine.CurvatureGain*, texture of twice the wavelength).
+  // A window whose normalisation leaves its steepest descent no rank (a straight edge on the
+  // real photographs' board) has no gain to give: the match stands, without one.
+  SpdFactor<6> projected;
+  out.has_curvature_gain = s.curvature_gain && projected.factor(Hs - sd_sum * sd_sum.transpose() / n -
+                                                                sd_t * sd_t.transpose() / tt);
+  if (out.has_curvature_gain) {
     const Eigen::Matrix<double, 2, 6> Pp = translation_rows(projected);
     alignas(32) float gm[kMaxN8];
+    alignas(32) float mono[3][kMaxN8];  // 1/2 dc^2, dc dr, 1/2 dr^2; 0 beyond n
+    for (int dr = -rad, k = 0; dr <= rad; ++dr)
+      for (int dc = -rad; dc <= rad; ++dc, ++k) {
+        mono[0][k] = 0.5f * static_cast<float>(dc * dc);
+        mono[1][k] = static_cast<float>(dc * dr);
+        mono[2][k] = 0.5f * static_cast<float>(dr * dr);
+      }
+    for (auto& row : mono) std::fill(row + n, row + n8, 0.f);
     const float* const rows[8] = {sdf[0], sdf[1], sdf[2], sdf[3], sdf[4], sdf[5], ones, t};
     for (int m = 0; m < 3; ++m)
       for (int c = 0; c < 2; ++c) {
         const float* g = sdf[4 + c];  // the gradient in q: sd's translation images
-        for (int dr = -rad, k = 0; dr <= rad; ++dr)
-          for (int dc = -rad; dc <= rad; ++dc, ++k)
-            gm[k] = g[k] * static_cast<float>(m == 0 ? 0.5 * dc * dc : m == 1 ? dc * dr : 0.5 * dr * dr);
-        std::fill(gm + n, gm + n8, 0.f);
+        for (int k = 0; k < n8; ++k) gm[k] = g[k] * mono[m][k];
         double r[9];
         lk_dots::dot_many(gm, 0.f, rows, 8, n8, r);
         const Eigen::Matrix<double, 6, 1> sum =

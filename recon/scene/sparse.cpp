@@ -103,6 +103,10 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   if (s.wide_step < 1)
     throw std::invalid_argument("sparse: wide_step " + std::to_string(s.wide_step) +
                                 " must be at least 1 px");
+  // The quadric's cells are searched within it: a radius past the image would only cost time.
+  if (!(s.curvature_radius_px >= 0 && s.curvature_radius_px <= rig.left.width()))
+    throw std::invalid_argument("sparse: curvature_radius_px " + std::to_string(s.curvature_radius_px) +
+                                " must be within 0 (off) and the image's width");
   R_lr_ = rig_.R;
   T_lr_ = rig_.T;
   R_rl_ = rig_.R.transpose();
@@ -265,6 +269,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   predict_shape(f, m.w, s_.lk.radius, -1, shape_.data());
   LkSettings lks = s_.lk;
   if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
+  lks.curvature_gain = s_.curvature_radius_px > 0;
   const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
                                         usable_[1].data(), m.px, A0, shape_.data(), lks);
   const bool noise_left = narrow.ssr_dn2 <= final_ssr_quantile_ * 2 * noise_sigma_dn * noise_sigma_dn;
@@ -300,7 +305,12 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
     return;
   }
   p.status = PointStatus::ok;
-  widen_steps(luma, f, xl, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wc);
+  displacement_derivatives(f, m.w, wc);
+  wc.narrow_px = lk.px;
+  wc.narrow_cov = lk.cov;
+  wc.narrow_gain = lk.curvature_gain;
+  wc.narrow_has_gain = lk.has_curvature_gain;
+  widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wc);
 }
 
 double SparseReconstructor::ssr_noise_bound(int radius) const {

@@ -33,6 +33,10 @@
 // tests above is the step just inside; a point keeps the widest step that passed, with test 3, at
 // every narrower step. Against the 9 x 9 window a 21 x 21 fit's misfit hides in the 9 x 9's noise
 // (2.3x its sd): the sphere's 21 x 21 points had rms(err/sigma) 2.14 in one step, none pass nested.
+// The curvature model (sparse_curvature.cpp, 2026-12-07): tests 2 and 3 are on the shift less the
+// share the model predicts for it (the two windows' biases differ), at a variance that adds the
+// model's, and the match kept is corrected by its own bias. They run in choose_wide, once every
+// feature's narrow match is known (the model is the neighbours'); test 1 in widen.
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -89,8 +93,8 @@ void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int
   }
 }
 
-void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
-                                      double w, const Eigen::Matrix2d& A0, const LkSettings& lks,
+void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, double w,
+                                      const Eigen::Matrix2d& A0, const LkSettings& lks,
                                       const LkResult& narrow, const Eigen::Vector2d& left_px,
                                       double noise_sigma_dn, WideCandidate& wc) {
   LkResult fits[2];  // this step's and the one before, alternately (as shape_wide_)
@@ -100,21 +104,21 @@ void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, 
     Eigen::Vector2d* shape = shape_wide_[k % 2].data();
     LkResult& fit = fits[k % 2];
     WideStep& st = wc.step[k];
-    fit = widen(luma, f, xl, w, A0, lks, k, *inner, inner_shape, shape, noise_sigma_dn, st.hausman);
+    fit = widen(luma, f, w, A0, lks, k, *inner, inner_shape, shape, noise_sigma_dn, st);
     if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return;
     st.usable = true;
     st.right_px = fit.px;
+    st.cov = fit.cov;
     st.zncc = fit.zncc;
     inner = &fit;
     inner_shape = shape;
   }
 }
 
-LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl,
-                                    double w, const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k,
+LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, double w,
+                                    const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k,
                                     const LkResult& narrow, const Eigen::Vector2d* inner_shape,
-                                    Eigen::Vector2d* shape, double noise_sigma_dn, double& hausman) {
-  hausman = -1;
+                                    Eigen::Vector2d* shape, double noise_sigma_dn, WideStep& st) {
   const int rn = k == 0 ? s_.lk.radius : wide_radii_[k - 1], rw = wide_radii_[k];
   if (!usable_wide_[k][0][static_cast<std::size_t>(f.v) * luma.width + f.u]) return {};
   const int sn = 2 * rn + 1, sw = 2 * rw + 1;
@@ -139,47 +143,61 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, co
   // inflated by the very misfit the test looks for).
   const Eigen::Matrix2d V = wide.diff_cov_unit * (narrow.ssr_dn2 / dof_n / wide.template_ss_dn2);
   if (!(V.trace() > 0 && V.determinant() > 0)) return {};
-  // Only the shift along the epipolar curve moves the depth, and a curved surface's misfit lies there
-  // (it is a disparity error); across the curve is noise alone, which would dilute the test.
-  // The curve's direction at the match: the right images of the ray at +-1 % of its inverse depth
-  // (a step of ~0.1-1 px, short against the curve's bending).
-  const Eigen::Vector3d ray(xl.x(), xl.y(), 1.0);
-  const Eigen::Vector2d e = (rig_.right.project(rig_.R * ray / (w * 1.01) + rig_.T) -
-                             rig_.right.project(rig_.R * ray / (w * 0.99) + rig_.T))
-                                .normalized();
-  const double de = e.dot(wide.px - narrow.px), ve = e.dot(V * e);
-  hausman = de * de / ve;
+  st.tested = true;
+  st.d = wide.px - narrow.px;
+  st.V = V;
+  st.gain = wide.curvature_gain;
+  st.has_gain = wide.has_curvature_gain;
   const double kappa = wide_kappa_[luma.bayer ? 1 : 0];
   const double F = (wide.ssr_outer_dn2 / e_ring) / (narrow.ssr_dn2 / dof_n);
   const double c1 = 2 / (9 * e_ring / kappa), c2 = 2 / (9 * dof_n / kappa);
   const double z = ((1 - c2) * std::cbrt(F) - (1 - c1)) / std::sqrt(c2 * std::cbrt(F * F) + c1);
-  if (z > wide_z_ || hausman > wide_chi1_) return {};
+  if (z > wide_z_) return {};
   return wide;
 }
 
 void SparseReconstructor::choose_wide(SparseResult& out) {
+  fit_curvature(out);
   const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
   const int gh = static_cast<int>(cell_point_.size()) / gw;
   const double r2 = s_.wide_pool_radius_px * s_.wide_pool_radius_px;
   const int reach = static_cast<int>(std::ceil(s_.wide_pool_radius_px / cell));
   for (std::size_t step = 0; step < wide_radii_.size(); ++step) {
     // Every feature with this step's shift test pools into it, kept or not (the statistic holds
-    // under the model either way; more of them see a surface's common bias sooner).
+    // under the model either way; more of them see a surface's common bias sooner). The test is on
+    // the shift less the curvature model's share of it, at a variance that takes the model's.
     std::fill(cell_point_.begin(), cell_point_.end(), -1);
     bool any = false;
-    for (std::size_t k = 0; k < wide_.size(); ++k)
-      if (wide_[k].step[step].hausman >= 0) {
-        const auto& q = out.points[k].left_px;
-        cell_point_[static_cast<std::size_t>(static_cast<int>(q.y()) / cell * gw +
-                                             static_cast<int>(q.x()) / cell)] = static_cast<int>(k);
-        any = true;
+    for (std::size_t k = 0; k < wide_.size(); ++k) {
+      WideCandidate& wc = wide_[k];
+      WideStep& st = wc.step[step];
+      st.hausman = -1;
+      if (!st.tested) continue;
+      const Eigen::Vector2d e = wc.dpdw.normalized();
+      Eigen::Vector2d d = st.d;
+      double ve = e.dot(st.V * e);
+      const bool inner_gain = step == 0 ? wc.narrow_has_gain : wc.step[step - 1].has_gain;
+      if (wc.has_curvature && st.has_gain && inner_gain) {
+        Eigen::Matrix<double, 2, 5> jw, jn;
+        d -= curvature_bias(wc, st.gain, &jw) -
+             curvature_bias(wc, step == 0 ? wc.narrow_gain : wc.step[step - 1].gain, &jn);
+        const Eigen::Matrix<double, 5, 1> a = (jw - jn).transpose() * e;
+        ve += a.dot(wc.theta_cov * a);
       }
+      st.hausman = e.dot(d) * e.dot(d) / ve;
+      const auto& q = out.points[k].left_px;
+      cell_point_[static_cast<std::size_t>(static_cast<int>(q.y()) / cell * gw +
+                                           static_cast<int>(q.x()) / cell)] = static_cast<int>(k);
+      any = true;
+    }
     if (!any) break;
     for (std::size_t k = 0; k < wide_.size(); ++k) {
       ScenePoint& p = out.points[k];
       WideCandidate& wc = wide_[k];
       const WideStep& st = wc.step[step];
-      if (!p.valid() || wc.chosen != static_cast<int>(step) || !st.usable) continue;
+      if (!p.valid() || wc.chosen != static_cast<int>(step) || !st.usable || st.hausman > wide_chi1_)
+        continue;
+      if (wc.curvature_misfit) continue;
       const int cx = static_cast<int>(p.left_px.x()) / cell, cy = static_cast<int>(p.left_px.y()) / cell;
       double sum = 0;
       int count = 0;
@@ -192,9 +210,16 @@ void SparseReconstructor::choose_wide(SparseResult& out) {
           ++count;
         }
       if (sum > count * chi2_upper_ratio(count, wide_z_)) continue;
-      p.right_px = st.right_px;
-      p.X = st.X;
-      p.depth_sigma_mm = st.depth_sigma_mm;
+      Eigen::Vector2d px = st.right_px;
+      Eigen::Matrix2d cov = st.cov;
+      Eigen::Vector3d X = st.X;
+      double sigma = st.depth_sigma_mm;
+      if (wc.has_curvature && st.has_gain &&
+          !correct_for_curvature(wc, p.left_px, st.gain, px, cov, X, sigma))
+        continue;
+      p.right_px = px;
+      p.X = X;
+      p.depth_sigma_mm = sigma;
       p.zncc = st.zncc;
       p.window_radius_px = wide_radii_[step];
       wc.chosen = static_cast<int>(step) + 1;

@@ -124,7 +124,7 @@ TEST(SparseCalibrationSigma, GivenForEveryValidPointWhenTheCalibrationHasACovari
 
 // At a real NanEye's blur (edges 1.0-1.6 px, ../shared/notes/measurements.md; the presets are rendered
 // at 0.41 px) the far plane's texture is faint and a fifth of its points carry depth sigmas of 2-4 %:
-// given, 2-3 % of them land beyond 5 % of the truth. Flagged `imprecise` instead, none does, and
+// given, 1-3 % of them land beyond 5 % of the truth. Flagged `imprecise` instead, none does, and
 // every point given holds its depth to max_depth_sigma_rel.
 TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
   sim::SensorSettings sensor;
@@ -166,7 +166,9 @@ TEST(SparseBlur, PointsTooImpreciseToStandBehindAreFlaggedNotGiven) {
       "plane-far, blur 1.22 px, 3 renders: all given %d points, %d beyond 5 %%; flagged: %d given, %d "
       "beyond 5 %%, %d imprecise\n",
       valid[0], outliers[0], valid[1], outliers[1], flagged);
-  EXPECT_GT(outliers[0], 0.015 * valid[0]);  // what the flag is for: the issue asks <= 1 %
+  // What the flag is for: it takes most of the points beyond 5 % (2026-12-07: 16 of 1536 given
+  // without it, 1 of 1477 with it; 33 and 4 before the curvature model and the interpolant's share).
+  EXPECT_GE(outliers[0], 5 * std::max(1, outliers[1]));
   EXPECT_LE(outliers[1], 0.01 * valid[1]);
   EXPECT_GE(valid[1], 3 * 300);
   EXPECT_GT(flagged, 0);

@@ -25,24 +25,27 @@ struct WindowFigures {
   double rms() const { return std::sqrt(z2 / std::max(1, good)); }
 };
 
-// Per LK window radius: the valid points of one render of `preset`.
+// Per LK window radius: the valid points of `renders` renders of `preset` (seeds 5, 6, ..).
 std::map<int, WindowFigures> by_window(const std::string& preset, const recon::scene::SparseSettings& s,
-                                       std::vector<int>* radii = nullptr) {
-  const sim::TexturedPair& p = test::textured_pair(preset, false);
+                                       std::vector<int>* radii = nullptr, int renders = 1) {
   recon::scene::SparseReconstructor sr(test::paper_d3(), s);
   if (radii) *radii = sr.wide_radii();
-  recon::scene::SparseResult out;
-  sr.reconstruct(sim::raw_view(p.left), sim::raw_view(p.right), out);
   std::map<int, WindowFigures> f;
-  for (const auto& q : out.points) {
-    if (!q.valid()) continue;
-    WindowFigures& w = f[q.window_radius_px];
-    ++w.points;
-    const double zt = p.depth.at<double>(static_cast<int>(std::lround(q.left_px.y())),
-                                         static_cast<int>(std::lround(q.left_px.x())));
-    if (!(std::abs(q.X.z() - zt) <= 0.05 * zt)) continue;
-    ++w.good;
-    w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+  for (int k = 0; k < renders; ++k) {
+    const sim::TexturedPair& p = test::textured_pair(preset, false, 5 + static_cast<std::uint64_t>(k));
+    sr.reset_ids();
+    recon::scene::SparseResult out;
+    sr.reconstruct(sim::raw_view(p.left), sim::raw_view(p.right), out);
+    for (const auto& q : out.points) {
+      if (!q.valid()) continue;
+      WindowFigures& w = f[q.window_radius_px];
+      ++w.points;
+      const double zt = p.depth.at<double>(static_cast<int>(std::lround(q.left_px.y())),
+                                           static_cast<int>(std::lround(q.left_px.x())));
+      if (!(std::abs(q.X.z() - zt) <= 0.05 * zt)) continue;
+      ++w.good;
+      w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+    }
   }
   for (const auto& [r, w] : f)
     std::printf("%-9s %2dx%-2d  points %3d  rms(err/sigma) %.2f\n", preset.c_str(), 2 * r + 1, 2 * r + 1,
@@ -87,28 +90,41 @@ TEST(SparseNestedWidening, APlaneGoesWideTheHeightFieldStopsEarly) {
 }
 
 // rms(err / sigma) within the 0.7-1.4 in every window that holds at least 20 good points,
-// on the planes and the curved sphere and height field, at the nested widening to 17 x 17.
+// on the planes and the curved sphere and height field, at the nested widening to 17 x 17, over
+// three renders. One render's window of a few dozen points is too few: the points a plane leaves
+// at 9 x 9 are mostly those along the image's top edge, where the wider windows do not fit, with
+// errors alike (seed 5's plane-far: 32 points, 15 on the edge row, rms 0.60 since the
+// interpolant's share, 0.72 before; seeds 5-7: 114 points, 0.84).
 TEST(SparseNestedWidening, EveryWindowsSigmasHold) {
   for (const char* preset : {"plane", "plane-far", "sphere", "height"})
-    for (const auto& [r, w] : by_window(preset, ladder(8, 2))) {
+    for (const auto& [r, w] : by_window(preset, ladder(8, 2), nullptr, 3)) {
       if (w.good < 20) continue;
       EXPECT_GE(w.rms(), 0.7) << preset << " radius " << r;
       EXPECT_LE(w.rms(), 1.4) << preset << " radius " << r;
     }
 }
 
-// The reason for the nesting, on the sphere: the single step to 21 x 21 keeps windows whose
-// curvature misfit its test (against the 9 x 9 window's noise) cannot see; step by step, each test
-// against the window just before sees it.
+// The reason for the nesting, on the sphere: without the curvature model (curvature_radius_px 0),
+// the single step to 21 x 21 keeps windows whose curvature misfit its test (against the 9 x 9
+// window's noise) cannot see; step by step, each test against the window just before sees it. With
+// the model (sparse_curvature.cpp) the bias is removed from the match itself, so even the single
+// step holds (measured 2026-12-07 on this render: 1.01 against 1.6 without it).
 TEST(SparseNestedWidening, TheSpheresCurvatureStopsTheNestingNotTheSingleStep) {
-  const auto single = by_window("sphere", ladder(10, 6));
+  recon::scene::SparseSettings no_model = ladder(10, 6);
+  no_model.curvature_radius_px = 0;
+  const auto single = by_window("sphere", no_model);
   ASSERT_TRUE(single.count(10));
   ASSERT_GE(single.at(10).good, 10);
   EXPECT_GT(single.at(10).rms(), 1.4);
-  for (const auto& [r, w] : by_window("sphere", ladder(10, 2)))
+  no_model.wide_step = 2;
+  for (const auto& [r, w] : by_window("sphere", no_model))
     if (w.good >= 10) {
       EXPECT_LE(w.rms(), 1.4) << "radius " << r;
     }
+  const auto modelled = by_window("sphere", ladder(10, 6));
+  ASSERT_TRUE(modelled.count(10));
+  ASSERT_GE(modelled.at(10).good, 100);
+  EXPECT_LE(modelled.at(10).rms(), 1.4);
 }
 
 TEST(SparseNestedWidening, AStepBelowOnePixelIsRefused) {
@@ -117,6 +133,19 @@ TEST(SparseNestedWidening, AStepBelowOnePixelIsRefused) {
     ADD_FAILURE() << "made";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("wide_step 0 must be at least 1 px"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SparseNestedWidening, ACurvatureRadiusOutsideTheImageIsRefused) {
+  for (const double r : {-1.0, 1e6, std::nan("")}) {
+    recon::scene::SparseSettings s;
+    s.curvature_radius_px = r;
+    try {
+      recon::scene::SparseReconstructor sr(test::paper_d3(), s);
+      ADD_FAILURE() << "made with " << r;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("curvature_radius_px"), std::string::npos) << e.what();
+    }
   }
 }
 

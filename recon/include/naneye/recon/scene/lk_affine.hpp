@@ -47,7 +47,8 @@ struct LkResult {
   // beyond LkSettings::inner_radius (0 when that is 0). Both images' noise is in it.
   double ssr_dn2 = 0, ssr_outer_dn2 = 0;
   // The residual's degrees of freedom, E[SSR] / the noise's variance per pixel: N - 8 for white
-  // noise, N - tr(P C) under LkSettings::noise_kernel (lk_affine.cpp).
+  // noise, N - tr(P C) under LkSettings::noise_kernel, each less the share of the right eye's noise
+  // the target's interpolant smooths away at the samples' fractional places (lk_affine.cpp).
   double noise_dof = 0;
   // With LkSettings::inner_radius: the covariance of (this fit's px - the px of the same fit over the
   // inner pixels only) per unit residual variance (in the normalised template's units: DN^2 divided
@@ -60,6 +61,8 @@ struct LkResult {
   // sum_m Q_m curvature_gain[m] v over m = (xx, xy, yy). Linearised (the Gauss-Newton fixed point's
   // sensitivity to a residual g_k . d_k): A P_t sum_k sd_k g_k^T (1/2 dc^2, dc dr, 1/2 dr^2)_m,
   // P_t the translation's rows of the solve, g_k the template's gradient in the warp's domain.
+  // False where LkSettings::curvature_gain was asked but the window has none to give (lk_affine.cpp).
+  bool has_curvature_gain = false;
   std::array<Eigen::Matrix2d, 3> curvature_gain{Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero(),
                                                 Eigen::Matrix2d::Zero()};
   int iterations = 0;

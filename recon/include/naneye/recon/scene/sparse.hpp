@@ -76,6 +76,17 @@ struct SparseSettings {
   // ~34 features lie within 32 px; measured on height mono, rms(err/sigma) 1.55 at 32 px, 1.33 at
   // 64, 1.27 (the narrow window's own) at 96, while the planes keep all their wider windows.
   double wide_pool_radius_px = 96;
+  // px; the neighbourhood whose 9 x 9 matches give a feature's curvature model (sparse_curvature.cpp):
+  // the inverse depth's gradient and second derivatives over the left image, fitted as a quadric
+  // through the other features' depths within this radius, give the second-order displacement an
+  // affine warp leaves; it moves every window's match by a bias the LK reports per unit
+  // (LkResult::curvature_gain). Where the curvature is significant the wider windows' shift tests
+  // and matches are corrected by it and their variance takes the model's; where the quadric does
+  // not follow the neighbourhood, no window wider than the narrow one. The radius trades the
+  // model's noise against its reach: ~50 features lie within 28 px (7 px cells), and on a plane
+  // the model's sd is then ~0.2 of a 21 x 21 match's sigma (0.5 at 21 px, 0.1 at 35 px, where the
+  // quadric follows the height preset's waves less often). 0: no model (the shift tests alone).
+  double curvature_radius_px = 28;
   double lr_tolerance_px = 1.0;  // px; right-to-left search must land this close to the feature
   // A point whose depth sigma exceeds this share of its depth is flagged `imprecise` instead of
   // given: 5 % of the depth would lie within its 3 sigma (the outlier line), so its depth is
@@ -169,18 +180,52 @@ class SparseReconstructor {
   void reset_ids() { ids_.reset(); }
 
  private:
-  // One step of the nested widening for one feature (sparse_wide.cpp).
+  // LkResult::curvature_gain: a match's shift per unit of each second-order displacement term.
+  using CurvatureGain = std::array<Eigen::Matrix2d, 3>;
   struct WideStep {
     double hausman = -1;  // its shift against the step before (chi-square, 1 dof); < 0: none
-    bool usable = false;  // passed its own tests and triangulated
+    bool tested = false;  // its fit converged: d and V below hold
+    bool usable = false;  // passed its ring test and triangulated
     Eigen::Vector2d right_px{0, 0};
     Eigen::Vector3d X{0, 0, 0};
     double depth_sigma_mm = 0, zncc = 0;
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();  // of right_px, px^2
+    // Its shift against the step before and that difference's covariance, px, px^2.
+    Eigen::Vector2d d{0, 0};
+    Eigen::Matrix2d V = Eigen::Matrix2d::Identity();
+    CurvatureGain gain{};
+    bool has_gain = false;  // LkResult::has_curvature_gain
   };
   // The widening's steps for one feature tried, narrowest first; `chosen`: how many choose_wide kept.
   struct WideCandidate {
     std::array<WideStep, kMaxLkRadius> step;
     int chosen = 0;
+    // The narrow window's match (before any correction) and its gain. The right image's place of
+    // the feature's ray as a function F(q, w) of the left pixel offset q and the inverse depth w
+    // (1/mm), at the coarse match: dF/dw (px mm, the epipolar curve's tangent), d2F/dw2 and
+    // d2F/dw dq (sparse_curvature.cpp).
+    Eigen::Vector2d narrow_px{0, 0};
+    Eigen::Matrix2d narrow_cov = Eigen::Matrix2d::Zero();
+    CurvatureGain narrow_gain{};
+    bool narrow_has_gain = false;  // LkResult::has_curvature_gain
+    Eigen::Vector2d dpdw{0, 0}, d2pdw2{0, 0};
+    Eigen::Matrix2d d2pdwdq = Eigen::Matrix2d::Zero();
+    // The template shape's own map at the coarse depth, F(q, w0): its Jacobian dF/dq and second
+    // derivatives (d2F/dc2, d2F/dc dr, d2F/dr2): the LK's affine acts on F's places, not on q.
+    Eigen::Matrix2d dpdq = Eigen::Matrix2d::Identity();
+    Eigen::Matrix<double, 2, 3> d2pdq2 = Eigen::Matrix<double, 2, 3>::Zero();
+    // Where the neighbours fix it: the second-order displacement's three coefficient vectors c_m
+    // (px / px^2; d_k = sum_m c_m (1/2 dc^2, dc dr, 1/2 dr^2)_m), their derivatives by the
+    // neighbourhood's quadric parameters (the inverse depth's gradient and second derivatives, 1/mm
+    // per px and px^2) and those parameters' covariance.
+    // has_curvature: the model holds and corrects; curvature_misfit: the quadric does not follow
+    // the neighbourhood (no widening); neither: no model (too few neighbours, or no curvature to
+    // tell), the shift tests alone.
+    bool has_curvature = false;
+    bool curvature_misfit = false;
+    Eigen::Matrix<double, 2, 3> c = Eigen::Matrix<double, 2, 3>::Zero();
+    std::array<Eigen::Matrix<double, 2, 5>, 3> dc{};
+    Eigen::Matrix<double, 5, 5> theta_cov = Eigen::Matrix<double, 5, 5>::Zero();
     // The widest step that passed its own tests, or nullptr.
     const WideStep* widest() const {
       const WideStep* w = nullptr;
@@ -205,22 +250,40 @@ class SparseReconstructor {
   // Each valid point takes its widest step's match whose neighbourhood's pooled shift test passes
   // at that step and every narrower one (sparse_wide.cpp).
   void choose_wide(SparseResult& out);
+  // Each valid point's curvature model from its neighbours' narrow matches, and its narrow match
+  // corrected by it (sparse_curvature.cpp).
+  void fit_curvature(SparseResult& out);
+  // wc's model from the neighbourhood's quadric (its parameters a, g, H and their covariance),
+  // where its curvature is distinguishable from none.
+  void set_curvature_model(WideCandidate& wc, const Eigen::Matrix<double, 6, 1>& theta,
+                           const Eigen::Matrix<double, 6, 6>& cov) const;
+  // F's derivatives at the feature (WideCandidate), from the exact model.
+  void displacement_derivatives(const Feature& f, double w, WideCandidate& wc) const;
+  // A match corrected by its curvature bias (wc's model, `gain`): right_px less the bias, cov plus
+  // the model's share; re-triangulated into X and depth_sigma_mm. False: triangulation failed.
+  bool correct_for_curvature(const WideCandidate& wc, const Eigen::Vector2d& left_px,
+                             const CurvatureGain& gain, Eigen::Vector2d& right_px, Eigen::Matrix2d& cov,
+                             Eigen::Vector3d& X, double& depth_sigma_mm) const;
+  // The bias a window with this gain takes from wc's model, and the bias's Jacobian by the model's
+  // parameters.
+  static Eigen::Vector2d curvature_bias(const WideCandidate& wc, const CurvatureGain& gain,
+                                        Eigen::Matrix<double, 2, 5>* jacobian = nullptr);
   // The nested widening of `narrow` (wide_radii_), into wc, until a step fails its own tests.
-  void widen_steps(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
-                   const Eigen::Matrix2d& A0, const LkSettings& lks, const LkResult& narrow,
-                   const Eigen::Vector2d& left_px, double noise_sigma_dn, WideCandidate& wc);
+  void widen_steps(const StereoLuma& luma, const Feature& f, double w, const Eigen::Matrix2d& A0,
+                   const LkSettings& lks, const LkResult& narrow, const Eigen::Vector2d& left_px,
+                   double noise_sigma_dn, WideCandidate& wc);
   // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
   // right image for a surface facing the camera at inverse depth w (exact model), relative to the
   // centre's place, row-major over the (2 rad + 1)^2 window.
   void predict_shape(const Feature& f, double w, int rad, int skip, Eigen::Vector2d* out) const;
   // Step k's refinement of `narrow` (the step before, radius wide_radii_[k - 1] or lk.radius; its
-  // template shape inner_shape) where the feature's window fits and it passes its own tests
-  // (sparse_wide.cpp), else not converged; its template shape into `shape`; `hausman`: its shift
-  // test's statistic (or -1).
-  LkResult widen(const StereoLuma& luma, const Feature& f, const Eigen::Vector2d& xl, double w,
-                 const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k, const LkResult& narrow,
+  // template shape inner_shape) where the feature's window fits and its ring passes (sparse_wide.cpp),
+  // else not converged; its template shape into `shape`; into `st` its shift against `narrow` and
+  // that shift's covariance (`tested`), for choose_wide's tests.
+  LkResult widen(const StereoLuma& luma, const Feature& f, double w, const Eigen::Matrix2d& A0,
+                 const LkSettings& lks, std::size_t k, const LkResult& narrow,
                  const Eigen::Vector2d* inner_shape, Eigen::Vector2d* shape, double noise_sigma_dn,
-                 double& hausman);
+                 WideStep& st);
 
   StereoRig rig_;
   std::optional<CalibrationUncertainty> calib_;  // empty: the calibration has no covariance
