@@ -448,15 +448,16 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   }
   const Eigen::Matrix2d cov_t = (white ? s2 : s2 / b2) * PBP;
   out.cov = out.A * cov_t * out.A.transpose();
-  // With curvature_gain: sum_k sd_k r_k for the residual r_k = g_k[c] m_k a displacement along axis c gives,
-  // less what the window's normalisation (zero mean, unit norm: the regressors `ones` and t) takes of it: r -
-  // mean(r) - t (t . r). Without that the 9 x 9's predicted shift was 35 % short (LkAffine.CurvatureGain*).
-  // The products g_k[c] m_k as six images, each against the six steepest-descent images, the window and the
-  // template. The fixed point's sensitivity to such an r is (SD^T Pi SD)^-1 SD^T Pi r, Pi that same
-  // projection: on a window whose texture is a ramp the template correlates with its own steepest
-  // descent and H alone was 5x off (LkAffine.CurvatureGain*, texture of twice the wavelength).
-  // A window whose normalisation leaves its steepest descent no rank (a straight edge on the
-  // real photographs' board) has no gain to give: the match stands, without one.
+  // With curvature_gain: a displacement d_k beyond the affine changes the residual by r_k = g_k . d_k
+  // (g the gradient in q: sd's translation images), less what the window's normalisation (zero
+  // mean, unit norm: the regressors `ones` and t) takes of it, r - mean(r) - t (t . r); the fixed
+  // point moves by (SD^T Pi SD)^-1 SD^T Pi r, Pi that projection. With H^-1 and r alone the 9 x 9's
+  // predicted shift was a fifth short, and 5x on a texture that is nearly a ramp over the window,
+  // whose template correlates with its own steepest descent (LkAffine.CurvatureGain*). Per monomial
+  // m and axis c the products g_k[c] m_k as an image against the six steepest-descent images, the
+  // window and the template: six passes of nine dot products. A window whose normalisation leaves
+  // its steepest descent no rank (a straight edge on the photographs' board) has no gain to give:
+  // its match stands, without one.
   SpdFactor<6> projected;
   out.has_curvature_gain = s.curvature_gain && projected.factor(Hs - sd_sum * sd_sum.transpose() / n -
                                                                 sd_t * sd_t.transpose() / tt);

@@ -99,21 +99,21 @@ void SparseReconstructor::set_curvature_model(WideCandidate& wc, const Eigen::Ma
   wc.c.col(1) = theta(4) * Fw + Fww * gx * gy + Fq0 * gy + Fq1 * gx;
   wc.c.col(2) = theta(5) * Fw + Fww * gy * gy + 2 * Fq1 * gy;
   // Their derivatives by (g_x, g_y, h_xx, h_xy, h_yy).
-  for (auto& d : wc.dc) d.setZero();
-  wc.dc[0].col(0) = 2 * Fww * gx + 2 * Fq0;
-  wc.dc[0].col(2) = Fw;
-  wc.dc[1].col(0) = Fww * gy + Fq1;
-  wc.dc[1].col(1) = Fww * gx + Fq0;
-  wc.dc[1].col(3) = Fw;
-  wc.dc[2].col(1) = 2 * Fww * gy + 2 * Fq1;
-  wc.dc[2].col(4) = Fw;
+  for (auto& d : wc.dc_dtheta) d.setZero();
+  wc.dc_dtheta[0].col(0) = 2 * Fww * gx + 2 * Fq0;
+  wc.dc_dtheta[0].col(2) = Fw;
+  wc.dc_dtheta[1].col(0) = Fww * gy + Fq1;
+  wc.dc_dtheta[1].col(1) = Fww * gx + Fq0;
+  wc.dc_dtheta[1].col(3) = Fw;
+  wc.dc_dtheta[2].col(1) = 2 * Fww * gy + 2 * Fq1;
+  wc.dc_dtheta[2].col(4) = Fw;
   // The affine acts on the template shape's places F(q, w0), not on q: the depth gradient's linear
   // part, F_w g^T q = F_w g^T (dF/dq)^-1 (F(q) - F(0)) less F's own second order, leaves
   // -F_w g^T (dF/dq)^-1 F_qq in d. Without it the tube's 21 x 21 bias was predicted 2x (slope 0.2
   // of the error on the prediction; 0.7 with it), most near the image edge where F bends.
   const Eigen::Matrix<double, 2, 3> k = wc.dpdq.inverse() * wc.d2pdq2;
   for (int m = 0; m < 3; ++m) {
-    auto& d = wc.dc[static_cast<std::size_t>(m)];
+    auto& d = wc.dc_dtheta[static_cast<std::size_t>(m)];
     wc.c.col(m) -= Fw * (gx * k(0, m) + gy * k(1, m));
     d.col(0) -= Fw * k(0, m);
     d.col(1) -= Fw * k(1, m);
@@ -161,7 +161,7 @@ Eigen::Vector2d SparseReconstructor::curvature_bias(const WideCandidate& wc, con
   if (jacobian) jacobian->setZero();
   for (std::size_t m = 0; m < 3; ++m) {
     bias += gain[m] * wc.c.col(static_cast<Eigen::Index>(m));
-    if (jacobian) *jacobian += gain[m] * wc.dc[m];
+    if (jacobian) *jacobian += gain[m] * wc.dc_dtheta[m];
   }
   return bias;
 }

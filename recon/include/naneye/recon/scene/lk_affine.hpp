@@ -30,7 +30,7 @@ struct LkSettings {
   // (Chebyshev distance), the ring a wider window adds to a narrower one (sparse.cpp's window test).
   int inner_radius = 0;
   // true: the result also reports LkResult::curvature_gain (the sparse path's curvature model,
-  // sparse_curvature.cpp), 36 more dot products per fit.
+  // sparse_curvature.cpp), 54 more dot products per fit.
   bool curvature_gain = false;
   static std::array<float, 9> binomial3() {
     return {1 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 4 / 16.f, 2 / 16.f, 1 / 16.f, 2 / 16.f, 1 / 16.f};

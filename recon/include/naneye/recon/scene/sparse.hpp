@@ -200,12 +200,9 @@ class SparseReconstructor {
   struct WideCandidate {
     std::array<WideStep, kMaxLkRadius> step;
     int chosen = 0;
-    // The narrow window's match (before any correction) and its gain. The right image's place of
-    // the feature's ray as a function F(q, w) of the left pixel offset q and the inverse depth w
-    // (1/mm), at the coarse match: dF/dw (px mm, the epipolar curve's tangent), d2F/dw2 and
-    // d2F/dw dq (sparse_curvature.cpp).
-    Eigen::Vector2d narrow_px{0, 0};
-    Eigen::Matrix2d narrow_cov = Eigen::Matrix2d::Zero();
+    // The narrow window's gain. The right image's place of the feature's ray as a function F(q, w)
+    // of the left pixel offset q and the inverse depth w (1/mm), at the coarse match: dF/dw (px mm,
+    // the epipolar curve's tangent), d2F/dw2 and d2F/dw dq (sparse_curvature.cpp).
     CurvatureGain narrow_gain{};
     bool narrow_has_gain = false;  // LkResult::has_curvature_gain
     Eigen::Vector2d dpdw{0, 0}, d2pdw2{0, 0};
@@ -224,7 +221,7 @@ class SparseReconstructor {
     bool has_curvature = false;
     bool curvature_misfit = false;
     Eigen::Matrix<double, 2, 3> c = Eigen::Matrix<double, 2, 3>::Zero();
-    std::array<Eigen::Matrix<double, 2, 5>, 3> dc{};
+    std::array<Eigen::Matrix<double, 2, 5>, 3> dc_dtheta{};
     Eigen::Matrix<double, 5, 5> theta_cov = Eigen::Matrix<double, 5, 5>::Zero();
     // The widest step that passed its own tests, or nullptr.
     const WideStep* widest() const {
@@ -250,8 +247,7 @@ class SparseReconstructor {
   // Each valid point takes its widest step's match whose neighbourhood's pooled shift test passes
   // at that step and every narrower one (sparse_wide.cpp).
   void choose_wide(SparseResult& out);
-  // Each valid point's curvature model from its neighbours' narrow matches, and its narrow match
-  // corrected by it (sparse_curvature.cpp).
+  // Each valid point's curvature model from its neighbours' narrow matches (sparse_curvature.cpp).
   void fit_curvature(SparseResult& out);
   // wc's model from the neighbourhood's quadric (its parameters a, g, H and their covariance),
   // where its curvature is distinguishable from none.
