@@ -305,7 +305,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
     return;
   }
   p.status = PointStatus::ok;
-  if (lks.curvature_gain) displacement_derivatives(f, m.w, wc);
+  displacement_derivatives(f, m.w, wc);  // dpdw also gives the shift tests their direction
   wc.narrow_gain = lk.curvature_gain;
   wc.narrow_has_gain = lk.has_curvature_gain;
   widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wc);
