@@ -36,17 +36,9 @@ constexpr int kMinNeighbours = 10;
 void SparseReconstructor::fit_curvature(SparseResult& out) {
   for (WideCandidate& wc : wide_) wc.has_curvature = wc.curvature_misfit = false;
   if (!(s_.curvature_radius_px > 0)) return;
-  const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
-  const int gh = static_cast<int>(cell_point_.size()) / gw;
-  const double r2 = s_.curvature_radius_px * s_.curvature_radius_px;
-  const int reach = static_cast<int>(std::ceil(s_.curvature_radius_px / cell));
   std::fill(cell_point_.begin(), cell_point_.end(), -1);
-  for (std::size_t k = 0; k < out.points.size(); ++k) {
-    const ScenePoint& p = out.points[k];
-    if (p.valid())
-      cell_point_[static_cast<std::size_t>(static_cast<int>(p.left_px.y()) / cell * gw +
-                                           static_cast<int>(p.left_px.x()) / cell)] = static_cast<int>(k);
-  }
+  for (std::size_t k = 0; k < out.points.size(); ++k)
+    if (out.points[k].valid()) cell_point_[point_cell(out.points[k].left_px)] = static_cast<int>(k);
   using Vec6 = Eigen::Matrix<double, 6, 1>;
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   for (std::size_t k = 0; k < out.points.size(); ++k) {
@@ -56,22 +48,18 @@ void SparseReconstructor::fit_curvature(SparseResult& out) {
     Vec6 b = Vec6::Zero();
     double ww = 0;
     int count = 0;
-    const int cx = static_cast<int>(p.left_px.x()) / cell, cy = static_cast<int>(p.left_px.y()) / cell;
-    for (int y = std::max(0, cy - reach); y <= std::min(gh - 1, cy + reach); ++y)
-      for (int x = std::max(0, cx - reach); x <= std::min(gw - 1, cx + reach); ++x) {
-        const int j = cell_point_[static_cast<std::size_t>(y * gw + x)];
-        if (j < 0 || j == static_cast<int>(k)) continue;
-        const ScenePoint& q = out.points[static_cast<std::size_t>(j)];
-        const Eigen::Vector2d dq = q.left_px - p.left_px;
-        if (dq.squaredNorm() > r2) continue;
-        const double z = q.X.z(), w = 1.0 / z, sw = q.depth_sigma_mm / (z * z), weight = 1.0 / (sw * sw);
-        Vec6 row;
-        row << 1, dq.x(), dq.y(), 0.5 * dq.x() * dq.x(), dq.x() * dq.y(), 0.5 * dq.y() * dq.y();
-        N.selfadjointView<Eigen::Lower>().rankUpdate(row, weight);
-        b += weight * w * row;
-        ww += weight * w * w;
-        ++count;
-      }
+    for_each_near(out, p.left_px, s_.curvature_radius_px, [&](std::size_t j) {
+      if (j == k) return;
+      const ScenePoint& q = out.points[j];
+      const Eigen::Vector2d dq = q.left_px - p.left_px;
+      const double z = q.X.z(), w = 1.0 / z, sw = q.depth_sigma_mm / (z * z), weight = 1.0 / (sw * sw);
+      Vec6 row;
+      row << 1, dq.x(), dq.y(), 0.5 * dq.x() * dq.x(), dq.x() * dq.y(), 0.5 * dq.y() * dq.y();
+      N.selfadjointView<Eigen::Lower>().rankUpdate(row, weight);
+      b += weight * w * row;
+      ww += weight * w * w;
+      ++count;
+    });
     if (count < kMinNeighbours) continue;
     N.triangularView<Eigen::Upper>() = N.transpose();
     const Eigen::LDLT<Mat6> ldlt(N);
@@ -142,12 +130,12 @@ void SparseReconstructor::displacement_derivatives(const Feature& f, double w, W
   const auto Fw = [&](int du, int dv) -> Eigen::Vector2d {
     return (F(du, dv, w + hw) - F(du, dv, w - hw)) / (2 * hw);
   };
-  wc.dpdw = Fw(0, 0);
-  wc.d2pdw2 = (F(0, 0, w + hw) - 2 * F(0, 0, w) + F(0, 0, w - hw)) / (hw * hw);
+  const Eigen::Vector2d f0 = F(0, 0, w), fp = F(0, 0, w + hw), fm = F(0, 0, w - hw);
+  wc.dpdw = (fp - fm) / (2 * hw);
+  wc.d2pdw2 = (fp - 2 * f0 + fm) / (hw * hw);
   wc.d2pdwdq.col(0) = 0.5 * (Fw(1, 0) - Fw(-1, 0));
   wc.d2pdwdq.col(1) = 0.5 * (Fw(0, 1) - Fw(0, -1));
-  const Eigen::Vector2d f0 = F(0, 0, w), fx1 = F(1, 0, w), fx0 = F(-1, 0, w), fy1 = F(0, 1, w),
-                        fy0 = F(0, -1, w);
+  const Eigen::Vector2d fx1 = F(1, 0, w), fx0 = F(-1, 0, w), fy1 = F(0, 1, w), fy0 = F(0, -1, w);
   wc.dpdq.col(0) = 0.5 * (fx1 - fx0);
   wc.dpdq.col(1) = 0.5 * (fy1 - fy0);
   wc.d2pdq2.col(0) = fx1 - 2 * f0 + fx0;

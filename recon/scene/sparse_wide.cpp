@@ -158,10 +158,6 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, do
 
 void SparseReconstructor::choose_wide(SparseResult& out) {
   fit_curvature(out);
-  const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
-  const int gh = static_cast<int>(cell_point_.size()) / gw;
-  const double r2 = s_.wide_pool_radius_px * s_.wide_pool_radius_px;
-  const int reach = static_cast<int>(std::ceil(s_.wide_pool_radius_px / cell));
   for (std::size_t step = 0; step < wide_radii_.size(); ++step) {
     // Every feature with this step's shift test pools into it, kept or not (the statistic holds
     // under the model either way; more of them see a surface's common bias sooner). The test is on
@@ -185,9 +181,7 @@ void SparseReconstructor::choose_wide(SparseResult& out) {
         ve += a.dot(wc.theta_cov * a);
       }
       st.hausman = e.dot(d) * e.dot(d) / ve;
-      const auto& q = out.points[k].left_px;
-      cell_point_[static_cast<std::size_t>(static_cast<int>(q.y()) / cell * gw +
-                                           static_cast<int>(q.x()) / cell)] = static_cast<int>(k);
+      cell_point_[point_cell(out.points[k].left_px)] = static_cast<int>(k);
       any = true;
     }
     if (!any) break;
@@ -195,20 +189,15 @@ void SparseReconstructor::choose_wide(SparseResult& out) {
       ScenePoint& p = out.points[k];
       WideCandidate& wc = wide_[k];
       const WideStep& st = wc.step[step];
-      if (!p.valid() || wc.chosen != static_cast<int>(step) || !st.usable || st.hausman > wide_chi1_)
+      if (!p.valid() || wc.chosen != static_cast<int>(step) || !st.usable || st.hausman > wide_chi1_ ||
+          wc.curvature_misfit)
         continue;
-      if (wc.curvature_misfit) continue;
-      const int cx = static_cast<int>(p.left_px.x()) / cell, cy = static_cast<int>(p.left_px.y()) / cell;
       double sum = 0;
       int count = 0;
-      for (int y = std::max(0, cy - reach); y <= std::min(gh - 1, cy + reach); ++y)
-        for (int x = std::max(0, cx - reach); x <= std::min(gw - 1, cx + reach); ++x) {
-          const int j = cell_point_[static_cast<std::size_t>(y * gw + x)];
-          if (j < 0 || (out.points[static_cast<std::size_t>(j)].left_px - p.left_px).squaredNorm() > r2)
-            continue;
-          sum += wide_[static_cast<std::size_t>(j)].step[step].hausman;
-          ++count;
-        }
+      for_each_near(out, p.left_px, s_.wide_pool_radius_px, [&](std::size_t j) {
+        sum += wide_[j].step[step].hausman;
+        ++count;
+      });
       if (sum > count * chi2_upper_ratio(count, wide_z_)) continue;
       Eigen::Vector2d px = st.right_px;
       Eigen::Matrix2d cov = st.cov;

@@ -5,7 +5,9 @@
 // niter2 + reprojection refinement (triangulation.hpp), each with the depth sigma its own match
 // precision gives. A feature whose match leaves a model's domain is flagged, never triangulated.
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -298,8 +300,28 @@ class SparseReconstructor {
   // narrow window's, and each widening step's.
   double final_ssr_quantile_ = 0;
   std::vector<double> wide_ssr_quantile_;
-  std::vector<WideCandidate> wide_;       // per feature tried
-  std::vector<int> cell_point_;           // per feature cell: its point's index, or -1
+  std::vector<WideCandidate> wide_;  // per feature tried
+  std::vector<int> cell_point_;      // per feature cell: its point's index, or -1
+  // cell_point_'s cell of a left pixel.
+  std::size_t point_cell(const Eigen::Vector2d& px) const {
+    const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
+    return static_cast<std::size_t>(static_cast<int>(px.y()) / cell * gw + static_cast<int>(px.x()) / cell);
+  }
+  // visit(j) for every point j in cell_point_ within `radius` px of `px` (a point there itself
+  // included), cell rows in order: the neighbourhood the curvature model and the pooled test use.
+  template <class Visit>
+  void for_each_near(const SparseResult& out, const Eigen::Vector2d& px, double radius, Visit&& visit) const {
+    const int cell = s_.features.cell_px, gw = (luma_.width + cell - 1) / cell;
+    const int gh = static_cast<int>(cell_point_.size()) / gw,
+              reach = static_cast<int>(std::ceil(radius / cell));
+    const int cx = static_cast<int>(px.x()) / cell, cy = static_cast<int>(px.y()) / cell;
+    for (int y = std::max(0, cy - reach); y <= std::min(gh - 1, cy + reach); ++y)
+      for (int x = std::max(0, cx - reach); x <= std::min(gw - 1, cx + reach); ++x) {
+        const int j = cell_point_[static_cast<std::size_t>(y * gw + x)];
+        if (j >= 0 && (out.points[static_cast<std::size_t>(j)].left_px - px).squaredNorm() <= radius * radius)
+          visit(static_cast<std::size_t>(j));
+      }
+  }
   std::vector<std::uint8_t> noise_mask_;  // left: 3x3 neighbourhood inside usable_search_[0]
   StereoLuma luma_;
   FeatureDetector detector_;
