@@ -305,6 +305,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
     return;
   }
   p.status = PointStatus::ok;
+  wc.kept_cov = lk.cov;
   displacement_derivatives(f, m.w, wc);  // dpdw also gives the shift tests their direction
   wc.narrow_gain = lk.curvature_gain;
   wc.narrow_has_gain = lk.has_curvature_gain;

@@ -25,7 +25,11 @@ struct WindowFigures {
   double rms() const { return std::sqrt(z2 / std::max(1, good)); }
 };
 
-// Per LK window radius: the valid points of `renders` renders of `preset` (seeds 5, 6, ..).
+// The key of by_window's tally of the points kept after a failed shift test, whatever their window.
+constexpr int kDisagreed = -1;
+
+// Per LK window radius: the valid points of `renders` renders of `preset` (seeds 5, 6, ..); under
+// kDisagreed again those whose wider window disagreed (ScenePoint::window_disagreement_px).
 std::map<int, WindowFigures> by_window(const std::string& preset, const recon::scene::SparseSettings& s,
                                        std::vector<int>* radii = nullptr, int renders = 1) {
   recon::scene::SparseReconstructor sr(test::paper_d3(), s);
@@ -38,18 +42,25 @@ std::map<int, WindowFigures> by_window(const std::string& preset, const recon::s
     sr.reconstruct(sim::raw_view(p.left), sim::raw_view(p.right), out);
     for (const auto& q : out.points) {
       if (!q.valid()) continue;
-      WindowFigures& w = f[q.window_radius_px];
-      ++w.points;
       const double zt = p.depth.at<double>(static_cast<int>(std::lround(q.left_px.y())),
                                            static_cast<int>(std::lround(q.left_px.x())));
-      if (!(std::abs(q.X.z() - zt) <= 0.05 * zt)) continue;
-      ++w.good;
-      w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+      for (const int key : {q.window_radius_px, q.window_disagreement_px > 0 ? kDisagreed : 0}) {
+        if (key == 0) continue;
+        WindowFigures& w = f[key];
+        ++w.points;
+        if (!(std::abs(q.X.z() - zt) <= 0.05 * zt)) continue;
+        ++w.good;
+        w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+      }
     }
   }
   for (const auto& [r, w] : f)
-    std::printf("%-9s %2dx%-2d  points %3d  rms(err/sigma) %.2f\n", preset.c_str(), 2 * r + 1, 2 * r + 1,
-                w.points, w.rms());
+    if (r == kDisagreed)
+      std::printf("%-9s windows disagreed  points %3d  rms(err/sigma) %.2f\n", preset.c_str(), w.points,
+                  w.rms());
+    else
+      std::printf("%-9s %2dx%-2d  points %3d  rms(err/sigma) %.2f\n", preset.c_str(), 2 * r + 1, 2 * r + 1,
+                  w.points, w.rms());
   return f;
 }
 
@@ -77,10 +88,11 @@ TEST(SparseNestedWidening, APlaneGoesWideTheHeightFieldStopsEarly) {
   const auto height = by_window("height", ladder(10, 2));
   int plane_all = 0, height_all = 0;
   for (const auto& [r, w] : plane) {
+    if (r == kDisagreed) continue;
     EXPECT_TRUE(r == 4 || r == 6 || r == 8 || r == 10) << r;
     plane_all += w.points;
   }
-  for (const auto& [r, w] : height) height_all += w.points;
+  for (const auto& [r, w] : height) height_all += r == kDisagreed ? 0 : w.points;
   ASSERT_GT(plane_all, 400);
   ASSERT_GT(height_all, 400);
   // Measured (3 renders): the plane 69 % of its points at 21 x 21; the height field none beyond
@@ -95,13 +107,28 @@ TEST(SparseNestedWidening, APlaneGoesWideTheHeightFieldStopsEarly) {
 // at 9 x 9 are mostly those along the image's top edge, where the wider windows do not fit, with
 // errors alike (seed 5's plane-far: 32 points, 15 on the edge row, rms 0.60 since the
 // interpolant's share, 0.72 before; seeds 5-7: 114 points, 0.84).
+//
+// The points kept after a failed shift test are a selection: on a surface the affine fits, the
+// test fails where the narrower match's noise is large, so with its own sigma their rms(err/sigma)
+// was 1.6-2.3 (bench_scene --refusals, every condition); their sigma now takes the disagreement
+// (sparse_wide.cpp). Too few per preset; pooled over the four.
 TEST(SparseNestedWidening, EveryWindowsSigmasHold) {
+  WindowFigures disagreed;
   for (const char* preset : {"plane", "plane-far", "sphere", "height"})
     for (const auto& [r, w] : by_window(preset, ladder(8, 2), nullptr, 3)) {
-      if (w.good < 20) continue;
+      if (r == kDisagreed) {
+        disagreed.points += w.points;
+        disagreed.good += w.good;
+        disagreed.z2 += w.z2;
+      }
+      if (w.good < 20 || r == kDisagreed) continue;
       EXPECT_GE(w.rms(), 0.7) << preset << " radius " << r;
       EXPECT_LE(w.rms(), 1.4) << preset << " radius " << r;
     }
+  std::printf("windows disagreed, pooled: %d points, rms(err/sigma) %.2f\n", disagreed.good, disagreed.rms());
+  ASSERT_GE(disagreed.good, 20);
+  EXPECT_GE(disagreed.rms(), 0.7);
+  EXPECT_LE(disagreed.rms(), 1.4);
 }
 
 // The reason for the nesting, on the sphere: without the curvature model (curvature_radius_px 0),

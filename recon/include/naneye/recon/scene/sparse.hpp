@@ -132,6 +132,10 @@ struct ScenePoint {
   // px; the radius of the LK window its match came from: lk.radius, or the widest step of the
   // nested widening it kept (SparseSettings::wide_step); 0 unless matched.
   int window_radius_px = 0;
+  // px along the epipolar curve; the next wider window's match disagreed with this one's by more
+  // than their noise allows (its shift test failed, sparse_wide.cpp), and depth_sigma_mm takes that
+  // disagreement in; 0: no such test failed.
+  double window_disagreement_px = 0;
   PointStatus status = PointStatus::no_candidates;
   bool valid() const { return status == PointStatus::ok; }
 };
@@ -186,6 +190,7 @@ class SparseReconstructor {
   using CurvatureGain = std::array<Eigen::Matrix2d, 3>;
   struct WideStep {
     double hausman = -1;  // its shift against the step before (chi-square, 1 dof); < 0: none
+    double d_along = 0;   // that shift along the epipolar curve, less the curvature model's share, px
     bool tested = false;  // its fit converged: d and V below hold
     bool usable = false;  // passed its ring test and triangulated
     Eigen::Vector2d right_px{0, 0};
@@ -202,6 +207,9 @@ class SparseReconstructor {
   struct WideCandidate {
     std::array<WideStep, kMaxLkRadius> step;
     int chosen = 0;
+    // The covariance of the match the point holds (px^2): the narrow one's, then each chosen step's
+    // after its curvature correction; a failed shift test widens it by the disagreement.
+    Eigen::Matrix2d kept_cov = Eigen::Matrix2d::Zero();
     // The narrow window's gain. The right image's place of the feature's ray as a function F(q, w)
     // of the left pixel offset q and the inverse depth w (1/mm), at the coarse match: dF/dw (px mm,
     // the epipolar curve's tangent), d2F/dw2 and d2F/dw dq (sparse_curvature.cpp).
@@ -262,6 +270,9 @@ class SparseReconstructor {
   bool correct_for_curvature(const WideCandidate& wc, const Eigen::Vector2d& left_px,
                              const CurvatureGain& gain, Eigen::Vector2d& right_px, Eigen::Matrix2d& cov,
                              Eigen::Vector3d& X, double& depth_sigma_mm) const;
+  // A failed shift test (sparse_wide.cpp): p keeps its match, its depth sigma widened by the
+  // disagreement d_along (px, along the curve).
+  void disagree(const WideCandidate& wc, ScenePoint& p, double d_along) const;
   // The bias a window with this gain takes from wc's model, and the bias's Jacobian by the model's
   // parameters.
   static Eigen::Vector2d curvature_bias(const WideCandidate& wc, const CurvatureGain& gain,
