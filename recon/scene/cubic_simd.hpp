@@ -6,6 +6,8 @@
 // rectification (resample_kernels.cpp) Keys.
 #include <immintrin.h>
 
+#include <cstddef>
+
 #include "../corners/simd.hpp"
 
 namespace naneye::recon::scene {
@@ -78,18 +80,31 @@ NANEYE_SIMD_INLINE V cubic_from_taps_v(const float* base, I idx, int width, cons
   return acc;
 }
 
-// The same in AVX2 with its gather instruction (16 gathers per 8 points, where lane-by-lane loads
-// took 128 loads and inserts).
+// Four floats from lo and four from hi, as one vector.
+__attribute__((target("avx2"))) NANEYE_SIMD_INLINE __m256 load_halves(const float* lo, const float* hi) {
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(lo)), _mm_loadu_ps(hi), 1);
+}
+
+// The same in AVX2. Each point's 4 x 4 taps are 4 runs of 4 floats: read as one 4-float load per
+// point and row and transposed into one vector per tap column, 32 loads and 32 shuffles per 8
+// points. AVX2's gather (16 per 8 points, 128 single-float loads) took 1.9x the time (a 21 x 21 LK
+// window: 2.1 against 1.1 us, bench_recon BM_LkSampleWindow's figures in docs/scene.md).
 __attribute__((target("avx2"))) NANEYE_SIMD_INLINE __m256 cubic_from_taps8(const float* base, __m256i idx,
                                                                            int width, const __m256* wx,
                                                                            const __m256* wy) {
-  const __m256i step = _mm256_set1_epi32(width);
+  alignas(32) int at[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(at), idx);
   __m256 acc = _mm256_setzero_ps();
-  for (int i = 0; i < 4; ++i, idx = _mm256_add_epi32(idx, step)) {
-    const __m256 p0 = _mm256_i32gather_ps(base, idx, 4);
-    const __m256 p1 = _mm256_i32gather_ps(base + 1, idx, 4);
-    const __m256 p2 = _mm256_i32gather_ps(base + 2, idx, 4);
-    const __m256 p3 = _mm256_i32gather_ps(base + 3, idx, 4);
+  for (int i = 0; i < 4; ++i) {
+    const std::ptrdiff_t off = static_cast<std::ptrdiff_t>(i) * width;
+    // Point l's row in the low half, point l + 4's in the high half.
+    const float* row0 = base + off;
+    const __m256 a0 = load_halves(row0 + at[0], row0 + at[4]), a1 = load_halves(row0 + at[1], row0 + at[5]),
+                 a2 = load_halves(row0 + at[2], row0 + at[6]), a3 = load_halves(row0 + at[3], row0 + at[7]);
+    const __m256 t0 = _mm256_unpacklo_ps(a0, a1), t1 = _mm256_unpackhi_ps(a0, a1);
+    const __m256 t2 = _mm256_unpacklo_ps(a2, a3), t3 = _mm256_unpackhi_ps(a2, a3);
+    const __m256 p0 = _mm256_shuffle_ps(t0, t2, 0x44), p1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+    const __m256 p2 = _mm256_shuffle_ps(t1, t3, 0x44), p3 = _mm256_shuffle_ps(t1, t3, 0xEE);
     const __m256 row =
         _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(wx[0], p0), _mm256_mul_ps(wx[1], p1)),
                                     _mm256_mul_ps(wx[2], p2)),

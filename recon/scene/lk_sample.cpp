@@ -1,5 +1,5 @@
 // See lk_sample.hpp. The 4-lane path is GCC vector code over corners/simd.hpp's helpers, the 8-lane
-// one AVX2 intrinsics (its gather instruction cannot be inlined into width-generic code compiled
+// one AVX2 intrinsics (cubic_simd.hpp's AVX2 taps cannot be inlined into width-generic code compiled
 // for the baseline).
 #include "lk_sample.hpp"
 
@@ -60,8 +60,8 @@ NANEYE_SIMD_INLINE bool sample_v(const GrayView& g, const Warp& w, const float* 
 bool sample_sse(const GrayView& g, const Warp& w, const float* qx, const float* qy, int n, float* out) {
   return sample_v<simd::V4>(g, w, qx, qy, n, out);
 }
-// The same with AVX2's gather instruction, written out in intrinsics (callgrind: 83 instructions per
-// point with lane-by-lane loads). The same operations in the same order as sample_v.
+// The same in AVX2 intrinsics (callgrind: 83 instructions per point with lane-by-lane loads), the taps
+// read row by row (cubic_from_taps8). The same operations in the same order as sample_v.
 __attribute__((target("avx2"))) bool sample_avx2(const GrayView& g, const Warp& w, const float* qx,
                                                  const float* qy, int n, float* out) {
   const __m256 m0 = _mm256_set1_ps(w.m[0]), m1 = _mm256_set1_ps(w.m[1]), m2 = _mm256_set1_ps(w.m[2]);

@@ -1,8 +1,8 @@
 #pragma once
 // The affine Lucas-Kanade's inner loop (lk_affine.cpp): the target image sampled by the cubic
 // B-spline over its coefficients (bspline.hpp, interpolate.hpp) at every template point moved by
-// the current warp, 4 points at a time (SSE2, the x86-64 baseline) or 8 (AVX2 with its gather
-// instruction), chosen per call from the CPU's features
+// the current warp, 4 points at a time (SSE2, the x86-64 baseline) or 8 (AVX2), chosen per call
+// from the CPU's features
 // (a test of a word libgcc filled at start-up); every width adds and multiplies in the plain loop's
 // order and never fuses a multiply-add, so all give the same bits. Callgrind, the sparse path's
 // matching on the plane: 54 M instructions in the LK before (double positions, one point at a
