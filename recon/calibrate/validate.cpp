@@ -6,6 +6,7 @@
 #include <numeric>
 #include <random>
 
+#include "naneye/base/median.hpp"
 #include "naneye/recon/calibrate/calibrate.hpp"
 #include "naneye/recon/geometry/calibration_uncertainty.hpp"
 #include "naneye/recon/geometry/metrics.hpp"
@@ -111,13 +112,6 @@ SplitValidation cross_validate_splits(std::span<const CalibrationView> views, co
 
 namespace {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 // Every corner both eyes saw in any view, triangulated (refined) with rigs a and b, against the
 // depth sigmas each rig's covariance allows (and their marginals taken as independent).
 struct DepthComparison {
@@ -168,8 +162,8 @@ void compare_halvings(std::span<const CalibrationView> views, const BoardGeometr
   out.depth_corners = static_cast<int>(oe.relative.size());
   out.depth_ratio_rms = oe.ratio_rms();
   out.depth_ratio_rms_independent = std::sqrt(oe.sum_independent / static_cast<double>(oe.relative.size()));
-  out.depth_median_relative = median(oe.relative);
-  out.depth_sigma_median_relative = median(oe.sigma_relative);
+  out.depth_median_relative = base::upper_median(std::vector<double>(oe.relative));
+  out.depth_sigma_median_relative = base::upper_median(std::vector<double>(oe.sigma_relative));
   out.split_depth_ratio_rms = {out.depth_ratio_rms};
   double sum = oe.sum;
   std::size_t corners = oe.relative.size();

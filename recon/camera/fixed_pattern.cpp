@@ -1,4 +1,5 @@
 #include "naneye/recon/camera/fixed_pattern.hpp"
+#include "naneye/base/median.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,20 +18,13 @@ Region used_region(const RawImageView& v) {
   return {v.ignore_edge_rows, v.height - v.ignore_edge_rows, v.width - v.ignore_last_cols};
 }
 
-double median_of(std::vector<double>& v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 // 1.4826 x the median absolute deviation: the sd of the normal part, which a handful of defect
 // pixels (a hot pixel is ~1000 DN off in the dark map) would otherwise dominate.
 double robust_sd_of(std::vector<double> v) {
   if (v.size() < 2) return 0.0;
-  const double m = median_of(v);
+  const double m = base::upper_median(v);
   for (double& x : v) x = std::abs(x - m);
-  return 1.4826 * median_of(v);
+  return 1.4826 * base::upper_median(v);
 }
 
 // Per-pixel variance of the mean of n frames (the sample variance / n); 0 for one frame.
@@ -128,7 +122,7 @@ FixedPattern FixedPatternBuilder::build() const {
   double mean_se2 = 0;
   for (double v : se2) mean_se2 += v;
   p.dark_se_dn = std::sqrt(mean_se2 / static_cast<double>(se2.size()));
-  p.black_dn = static_cast<float>(median_of(used_dark));
+  p.black_dn = static_cast<float>(base::upper_median(used_dark));
   if (flat_n_ == 0) return p;
 
   // The flat's signal per pixel, and its level: median and saturated share over the used pixels.
@@ -142,7 +136,7 @@ FixedPattern FixedPatternBuilder::build() const {
       used_signal.push_back(signal[k]);
       if (flat >= s_.white_dn - s_.saturation_margin_dn) ++saturated;
     }
-  const double level = median_of(used_signal);
+  const double level = base::upper_median(used_signal);
   if (level < s_.min_flat_signal_dn)
     throw std::invalid_argument("fixed pattern: the flat frames' median signal is " +
                                 std::to_string(static_cast<int>(std::lround(level))) +
@@ -172,7 +166,7 @@ FixedPattern FixedPatternBuilder::build() const {
           neigh.push_back(signal[static_cast<std::size_t>(rr * w + cc)]);
         }
       if (neigh.size() < 8) continue;  // the first and last used rows: no symmetric neighbourhood
-      const double local = median_of(neigh);
+      const double local = base::upper_median(neigh);
       const auto k = static_cast<std::size_t>(r * w + c);
       if (local <= 0) continue;
       const double g = signal[k] / local;

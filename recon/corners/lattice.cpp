@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 
+#include "naneye/base/median.hpp"
 #include "naneye/recon/corners/coarse_grid.hpp"
 #include "naneye/recon/corners/grid.hpp"
 
@@ -245,8 +247,8 @@ int CoarseGridFinder::grow(int seed, int rows, int cols, Eigen::Vector2f* out) {
       step_len[static_cast<std::size_t>(with_steps++)] = static_cast<float>(std::min(dc.norm(), dr.norm()));
     }
   }
-  std::nth_element(step_len.begin(), step_len.begin() + with_steps / 2, step_len.begin() + with_steps);
-  const double median_step = with_steps > 0 ? step_len[static_cast<std::size_t>(with_steps / 2)] : 0.0;
+  const double median_step =
+      base::upper_median(std::span(step_len).first(static_cast<std::size_t>(with_steps)));
   std::array<int, kMaxCells> sign{};
   for (int k = 0; k < n; ++k) {
     const int ci = cells[static_cast<std::size_t>(k)][0], cj = cells[static_cast<std::size_t>(k)][1];

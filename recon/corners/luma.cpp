@@ -5,6 +5,7 @@
 #include <limits>
 #include <opencv2/core.hpp>
 
+#include "naneye/base/median.hpp"
 #include "naneye/recon/corners/detector.hpp"
 
 namespace naneye::recon {
@@ -110,8 +111,7 @@ void raw_to_luminance(const RawImageView& im, float* out, float* scratch, float 
     const auto [mn, mx] = std::minmax_element(nb.begin(), nb.end());
     const bool lone = v > *mx + defect_threshold_dn || v < *mn - defect_threshold_dn;
     if (lone && (!textured || apart_from_its_texture(f, w, r, c, bayer, defect_threshold_dn))) {
-      std::nth_element(nb.begin(), nb.begin() + 4, nb.end());
-      f[r * w + c] = nb[4];
+      f[r * w + c] = base::upper_median(nb);
       return true;
     }
     return false;

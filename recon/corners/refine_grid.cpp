@@ -4,7 +4,9 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <span>
 
+#include "naneye/base/median.hpp"
 #include "naneye/recon/corners/detector.hpp"
 #include "naneye/recon/corners/refine.hpp"
 #include "naneye/recon/corners/sine_fit.hpp"
@@ -311,11 +313,10 @@ bool CornerDetector::refine_all(CornerResult& out, bool from_previous) {
     const double excess = fits[i].rms * fits[i].rms - residual_bound(fits[i], radii[i], 0.0);
     misfit[i] = std::sqrt(std::max(excess, 0.0)) / std::max(fits[i].contrast, 1e-9);
   }
-  std::nth_element(misfit.begin(), misfit.begin() + static_cast<std::ptrdiff_t>(n / 2),
-                   misfit.begin() + static_cast<std::ptrdiff_t>(n));
+  const double median_misfit = base::upper_median(std::span(misfit).first(n));
   const double frame_misfit =
-      std::clamp(2.0 * misfit[n / 2], settings_.model_misfit, 2.0 * settings_.model_misfit);
-  const double poor_misfit = std::max(settings_.poor_misfit, settings_.poor_per_median * misfit[n / 2]);
+      std::clamp(2.0 * median_misfit, settings_.model_misfit, 2.0 * settings_.model_misfit);
+  const double poor_misfit = std::max(settings_.poor_misfit, settings_.poor_per_median * median_misfit);
   // A border corner's outer squares may end within its window: cut by the print (OpenCV's sample
   // board's outer columns are half squares), the image edge or the fold, so the window holds the
   // margin's edge, which the model has not. Where such a corner's fit is refused, smaller windows,

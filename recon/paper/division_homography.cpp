@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "naneye/base/median.hpp"
 #include "naneye/recon/paper/division_model.hpp"
 
 namespace naneye::recon {
@@ -266,11 +267,9 @@ Solved solve(std::span<const PlaneCorrespondences> planes, const DivisionHomogra
     }
   }
   if (lams.empty()) return out;
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
-  double lam = median(lams), lamr = median(lamrs);
+  // Copies: the medians reorder.
+  double lam = base::upper_median(std::vector<double>(lams)),
+         lamr = base::upper_median(std::vector<double>(lamrs));
   // One plane keeps its own linear H; several planes restart every H from the shared lambdas.
   if (sc.size() > 1 || lams.size() != 1) {
     for (std::size_t b = 0; b < sc.size(); ++b) Hs[b] = dlt_fixed_lambda(sc[b].left, sc[b].right, lam, lamr);

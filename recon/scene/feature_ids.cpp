@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "interpolate.hpp"
+#include "naneye/base/median.hpp"
 
 namespace naneye::recon::scene {
 
@@ -139,14 +140,6 @@ void FeatureIds::pair_whole_pixels(const GrayView& left, std::span<const Feature
   }
 }
 
-namespace {
-float median(std::vector<float>& v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-}  // namespace
-
 void FeatureIds::estimate_motion(std::span<const Feature> tried) {
   const int mc = (w_ + s_.motion_cell_px - 1) / s_.motion_cell_px;
   const int mr = static_cast<int>(motion_.size()) / mc;
@@ -159,7 +152,7 @@ void FeatureIds::estimate_motion(std::span<const Feature> tried) {
   for (const Candidate& c : candidates_) vote(c);
   Motion global;
   if (static_cast<int>(votes_x_.size()) >= s_.min_motion_votes)
-    global = {median(votes_x_), median(votes_y_), true};
+    global = {base::upper_median(votes_x_), base::upper_median(votes_y_), true};
   for (int cr = 0; cr < mr; ++cr)
     for (int cc = 0; cc < mc; ++cc) {
       votes_x_.clear();
@@ -171,7 +164,7 @@ void FeatureIds::estimate_motion(std::span<const Feature> tried) {
       }
       Motion& m = motion_[static_cast<std::size_t>(cr) * mc + cc];
       m = static_cast<int>(votes_x_.size()) >= s_.min_motion_votes
-              ? Motion{median(votes_x_), median(votes_y_), true}
+              ? Motion{base::upper_median(votes_x_), base::upper_median(votes_y_), true}
               : global;
     }
 }
