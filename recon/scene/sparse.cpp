@@ -136,7 +136,7 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
   luma_.right.assign(np, 0.f);
   luma_.scratch.assign(np, 0.f);
   luma_.right_spline.assign(np, 0.f);
-  final_ssr_quantile_ = ssr_noise_bound(s_.lk.radius);
+  ssr_quantile_[static_cast<std::size_t>(s_.lk.radius)] = ssr_noise_bound(s_.lk.radius);
   luma_.left_search.assign(np, 0.f);
   luma_.right_search.assign(np, 0.f);
   features_.reserve(static_cast<std::size_t>(s_.max_features));
@@ -272,8 +272,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   lks.curvature_gain = s_.curvature_radius_px > 0;
   const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
                                         usable_[1].data(), m.px, A0, shape_.data(), lks);
-  const bool noise_left = narrow.ssr_dn2 <= final_ssr_quantile_ * 2 * noise_sigma_dn * noise_sigma_dn;
-  if (!narrow.converged || (narrow.zncc < s_.min_final_zncc && !noise_left)) {
+  if (!fit_accepted(narrow, s_.lk.radius, noise_sigma_dn)) {
     p.status = PointStatus::refinement_failed;
     p.zncc = narrow.converged ? narrow.zncc : p.zncc;
     return;

@@ -55,8 +55,7 @@ void SparseReconstructor::init_wide() {
   wide_kappa_[0] = noise_dof_factor(LkSettings{}.noise_kernel);
   wide_kappa_[1] = noise_dof_factor(LkSettings::binomial3());
   const int wide = std::max(s_.wide_radius, s_.lk.radius), side = 2 * wide + 1;
-  wide_ssr_quantile_.clear();
-  for (int r : wide_radii_) wide_ssr_quantile_.push_back(ssr_noise_bound(r));
+  for (int r : wide_radii_) ssr_quantile_[static_cast<std::size_t>(r)] = ssr_noise_bound(r);
   for (auto& shape : shape_wide_)
     shape.assign(static_cast<std::size_t>(side * side), Eigen::Vector2d::Zero());
   wide_.reserve(static_cast<std::size_t>(s_.max_features));
@@ -135,10 +134,9 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, do
   const LkResult wide =
       refine_affine(luma.left_view(), detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
                     usable_wide_[k][1].data(), narrow.px, A0, shape, wl, &narrow.A);
-  // The narrow window's acceptance (sparse.cpp): a ZNCC that high, or a residual the noise explains
-  // (faint texture: at the measured sensor the tube's wider windows failed the ZNCC alone).
-  const bool noise_left = wide.ssr_dn2 <= wide_ssr_quantile_[k] * 2 * noise_sigma_dn * noise_sigma_dn;
-  if (!wide.converged || (wide.zncc < s_.min_final_zncc && !noise_left) || !(narrow.ssr_dn2 > 0)) return {};
+  // The narrow window's acceptance (at the measured sensor the tube's wider windows failed the ZNCC
+  // alone).
+  if (!fit_accepted(wide, rw, noise_sigma_dn) || !(narrow.ssr_dn2 > 0)) return {};
   const double nn = sn * sn, nw = sw * sw, e_ring = (nw - nn) * wide.noise_dof / nw, dof_n = narrow.noise_dof;
   if (!(dof_n > 0 && e_ring > 0)) return {};
   // The difference's covariance at the narrow window's residual variance (the wide one's would be

@@ -249,6 +249,14 @@ class SparseReconstructor {
   // The residual bound of a window of this radius within which its match's misfit is the noise
   // alone, per unit 2 sigma_n^2 (final_noise_false_reject); < 0: off.
   double ssr_noise_bound(int radius) const;
+  // A converged fit of a window of this radius is a match: a ZNCC of min_final_zncc or more, or a
+  // residual the noise explains (ssr_quantile_; faint texture, where the ZNCC alone refused the
+  // measured sensor's tube).
+  bool fit_accepted(const LkResult& fit, int radius, double noise_sigma_dn) const {
+    const bool noise_left =
+        fit.ssr_dn2 <= ssr_quantile_[static_cast<std::size_t>(radius)] * 2 * noise_sigma_dn * noise_sigma_dn;
+    return fit.converged && (!(fit.zncc < s_.min_final_zncc) || noise_left);
+  }
   // SparseSettings::max_depth_sigma_rel.
   bool precise(const Eigen::Vector3d& X, double depth_sigma_mm) const {
     return depth_sigma_mm <= s_.max_depth_sigma_rel * X.z();
@@ -307,10 +315,9 @@ class SparseReconstructor {
   double wide_z_ = 0;              // upper normal quantile of wide_false_reject
   double wide_chi1_ = 0;           // chi-square(1) upper quantile of wide_false_reject
   double wide_kappa_[2] = {1, 1};  // noise_dof_factor: mono, Bayer
-  // The LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject; < 0: off): the
-  // narrow window's, and each widening step's.
-  double final_ssr_quantile_ = 0;
-  std::vector<double> wide_ssr_quantile_;
+  // The LK residual's noise bound per unit 2 sigma_n^2 (final_noise_false_reject; < 0: off), by
+  // window radius: the narrow window's and each widening step's (ssr_noise_bound).
+  std::array<double, kMaxLkRadius + 1> ssr_quantile_{};
   std::vector<WideCandidate> wide_;  // per feature tried
   std::vector<int> cell_point_;      // per feature cell: its point's index, or -1
   // cell_point_'s cell of a left pixel.
