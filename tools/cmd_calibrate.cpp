@@ -19,6 +19,7 @@
 #include "image_pairs.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/presets.hpp"
+#include "replace_file.hpp"
 
 namespace naneye::tools {
 namespace {
@@ -55,24 +56,14 @@ void thin_views(CollectedViews& v, int max_views) {
   v = std::move(kept);
 }
 
-// Written next to the target and renamed over it, so a failed write never leaves half a file.
 // The provenance goes in as YAML comments, which load_rig (and OpenCV) skip.
-void write_atomically(const recon::StereoRig& rig, const std::filesystem::path& out,
-                      const std::string& provenance) {
-  const std::filesystem::path tmp = out.parent_path() / ("." + out.stem().string() + ".partial.yaml");
-  try {
+void write_rig(const recon::StereoRig& rig, const std::filesystem::path& out, const std::string& provenance) {
+  replace_file(out, [&](const std::filesystem::path& tmp) {
     recon::save_rig(rig, tmp);
-    {
-      std::ofstream f(tmp, std::ios::app);
-      f << provenance;
-      if (!f) throw std::runtime_error(out.string() + ": cannot be written");
-    }
-    std::filesystem::rename(tmp, out);
-  } catch (...) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw;
-  }
+    std::ofstream f(tmp, std::ios::app);
+    f << provenance;
+    if (!f) throw std::runtime_error(out.string() + ": cannot be written");
+  });
 }
 
 void run_calibrate(const CalibrateOptions& o) {
@@ -168,7 +159,7 @@ void run_calibrate(const CalibrateOptions& o) {
                << odd_even->pooled_depth_ratio_rms << " over " << odd_even->pooled_depth_corners
                << " corners; calibration_sigma_scale " << odd_even->sigma_scale << "\n";
   }
-  write_atomically(rig, o.output, provenance.str());
+  write_rig(rig, o.output, provenance.str());
   print_report(res, views, splits.get(), odd_even.get(), settings, {o.json, o.output});
 }
 

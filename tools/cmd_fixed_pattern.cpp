@@ -16,6 +16,7 @@
 #include "naneye/app/processor.hpp"
 #include "naneye/app/sources.hpp"
 #include "naneye/recon/camera/fixed_pattern_io.hpp"
+#include "replace_file.hpp"
 #include "source_pairs.hpp"
 
 namespace naneye::tools {
@@ -66,18 +67,8 @@ void run(const FixedPatternOptions& o) {
   const recon::StereoFixedPattern pattern{left.build(), right.build()};
   print_eye("left", pattern.left);
   print_eye("right", pattern.right);
-  // Written beside the target and renamed over it: a failed write never leaves half a file.
   const std::filesystem::path out(o.output);
-  // (The name keeps its endings: FileStorage picks YAML and gzip from them.)
-  const std::filesystem::path tmp = out.parent_path() / (".part-" + out.filename().string());
-  try {
-    recon::save_fixed_pattern(tmp, pattern);
-    std::filesystem::rename(tmp, out);
-  } catch (...) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw;
-  }
+  replace_file(out, [&](const std::filesystem::path& tmp) { recon::save_fixed_pattern(tmp, pattern); });
   spdlog::info("wrote {}: set [sensor] fixed_pattern = \"{}\" in naneyed.toml", out.string(),
                std::filesystem::absolute(out).string());
 }

@@ -1,7 +1,8 @@
 // `naneye fixed-pattern` run as a user runs it: capped and flat frames of the measured sensor
 // (sim::SensorSettings::measured, written as 16-bit PNG pairs and read back through images://) give
 // a file whose maps hold the die's DSNU and PRNU; `naneye recon --fixed-pattern` reads it; frames
-// that saw light, too few frames and a missing flat level are refused with nothing written.
+// that saw light, too few frames and a missing flat level are refused with nothing written, and a
+// write that fails leaves no half file.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -99,6 +100,25 @@ TEST_F(FixedPatternCli, RefusesWithNothingWritten) {
   r = test::run_cli("fixed-pattern --dark " + dark + " --frames 16 -o " + out.string(), true);
   EXPECT_EQ(r.exit_code, 0) << r.out;
   EXPECT_TRUE(recon::load_fixed_pattern(out).left.gain.empty());
+}
+
+// The file is written beside its target and renamed over it (tools/replace_file.cpp): when the
+// rename fails (the target a directory that holds a file), the target stays as it was and no
+// temporary is left.
+TEST_F(FixedPatternCli, AFailedReplaceLeavesTheTargetAndNoTemporary) {
+  const auto out = dir_ / "fp.yml";
+  std::filesystem::create_directories(out);
+  std::FILE* keep = std::fopen((out / "keep").c_str(), "w");
+  ASSERT_NE(keep, nullptr);
+  std::fclose(keep);
+  const std::string dark = write_frames("dark", 0.0, 16);
+  const test::CliResult r =
+      test::run_cli("fixed-pattern --dark " + dark + " --frames 16 -o " + out.string(), true);
+  EXPECT_NE(r.exit_code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::is_directory(out));
+  EXPECT_TRUE(std::filesystem::exists(out / "keep"));
+  for (const auto& e : std::filesystem::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().rfind(".part-", 0), std::string::npos) << e.path();
 }
 
 }  // namespace
