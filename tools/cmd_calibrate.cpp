@@ -56,14 +56,18 @@ void thin_views(CollectedViews& v, int max_views) {
   v = std::move(kept);
 }
 
-// The provenance goes in as YAML comments, which load_rig (and OpenCV) skip.
+// The provenance goes in as YAML comments, which load_rig (and OpenCV) skip: so YAML whatever the
+// output's name says (an XML or JSON file with them appended would not load).
 void write_rig(const recon::StereoRig& rig, const std::filesystem::path& out, const std::string& provenance) {
-  replace_file(out, [&](const std::filesystem::path& tmp) {
-    recon::save_rig(rig, tmp);
-    std::ofstream f(tmp, std::ios::app);
-    f << provenance;
-    if (!f) throw std::runtime_error(out.string() + ": cannot be written");
-  });
+  replace_file(
+      out,
+      [&](const std::filesystem::path& tmp) {
+        recon::save_rig(rig, tmp);
+        std::ofstream f(tmp, std::ios::app);
+        f << provenance;
+        if (!f) throw std::runtime_error(out.string() + ": cannot be written");
+      },
+      ".yaml");
 }
 
 void run_calibrate(const CalibrateOptions& o) {

@@ -87,8 +87,8 @@ __attribute__((target("avx2"))) NANEYE_SIMD_INLINE __m256 load_halves(const floa
 
 // The same in AVX2. Each point's 4 x 4 taps are 4 runs of 4 floats: read as one 4-float load per
 // point and row and transposed into one vector per tap column, 32 loads and 32 shuffles per 8
-// points. AVX2's gather (16 per 8 points, 128 single-float loads) took 1.9x the time (a 21 x 21 LK
-// window: 2.1 against 1.1 us, bench_recon BM_LkSampleWindow's figures in docs/scene.md).
+// points. AVX2's gather (16 per 8 points, 128 single-float loads) took 1.7x the time (a 21 x 21 LK
+// window: 2.14 against 1.23 us, bench_lk's BM_LkSampleWindow; docs/scene.md).
 __attribute__((target("avx2"))) NANEYE_SIMD_INLINE __m256 cubic_from_taps8(const float* base, __m256i idx,
                                                                            int width, const __m256* wx,
                                                                            const __m256* wy) {

@@ -94,7 +94,7 @@ void project(const Eigen::Matrix<double, 2, 6>& P, const float (&sd)[6][kMaxN8],
 
 // out[k] = a[k] b[k] over whole blocks (n8: lk_dots::padded). In vectors: at -O2 GCC's very cheap
 // cost model left these loops scalar (their count is not known to be a whole number of vectors),
-// ~20 % of a 21 x 21 fit's own time (bench_lk).
+// 27 % of a 21 x 21 fit's own time (bench_lk).
 void multiply(const float* a, const float* b, int n8, float* out) {
   using simd::V4;
   for (int k = 0; k < n8; k += 4) simd::store(out + k, simd::load<V4>(a + k) * simd::load<V4>(b + k));
@@ -183,7 +183,7 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
                        const Eigen::Matrix2d* start_linear) {
   LkResult out;
   const int rad = s.radius, side = 2 * rad + 1, n = side * side;
-  if (n > kMaxN || n <= 8) return out;
+  if (rad < 1 || n > kMaxN) return out;  // rad 1: 9 pixels, one more than the fit's 8 parameters
   const int n8 = lk_dots::padded(n);
   // Template, normalised to zero mean and unit norm (and its gradients by the same scale). t and the
   // steepest-descent images as float arrays for lk_dots, zero beyond n.
@@ -231,7 +231,9 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
   const Eigen::Matrix2f G = (scale * to_q).cast<float>();
   {
     using simd::V4;
-    const V4 g00 = V4{} + G(0, 0), g10 = V4{} + G(1, 0), g01 = V4{} + G(0, 1), g11 = V4{} + G(1, 1);
+    // splat keeps a -0 (A0's inverse has them): the scalar loop's products to the sign of a zero.
+    const V4 g00 = simd::splat<V4>(G(0, 0)), g10 = simd::splat<V4>(G(1, 0)), g01 = simd::splat<V4>(G(0, 1)),
+             g11 = simd::splat<V4>(G(1, 1));
     for (int k = 0; k < n8; k += 4) {
       const V4 x = simd::load<V4>(gx + k), y = simd::load<V4>(gy + k);
       const V4 a = x * g00 + y * g10, b = x * g01 + y * g11;

@@ -100,6 +100,10 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
     throw std::invalid_argument("sparse: lk.radius " + std::to_string(s.lk.radius) + " and wide_radius " +
                                 std::to_string(s.wide_radius) + " must be at most " +
                                 std::to_string(kMaxLkRadius) + " (the affine LK's widest window)");
+  // A 3 x 3 window: one pixel more than the fit's 8 parameters (lk_affine.cpp).
+  if (s.lk.radius < 1)
+    throw std::invalid_argument("sparse: lk.radius " + std::to_string(s.lk.radius) +
+                                " must be at least 1 px");
   if (s.wide_step < 1)
     throw std::invalid_argument("sparse: wide_step " + std::to_string(s.wide_step) +
                                 " must be at least 1 px");

@@ -110,8 +110,10 @@ TEST_F(CalibrateCli, RefusesBadInputAndWritesNothing) {
   EXPECT_TRUE(std::filesystem::is_empty(dir_));
 }
 
+// Also: an output named .xml still holds YAML (its provenance lines are YAML comments; appended to
+// XML they would not load).
 TEST_F(CalibrateCli, MaxViewsThinsEvenly) {
-  const auto out = dir_ / "calib.yaml";
+  const auto out = dir_ / "calib.xml";
   const test::CliResult r = test::run_cli(
       "calibrate --json --max-views 4 --input " + data("sim-d3-mono/capture.raw") + " -o " + out.string(),
       false);
@@ -122,4 +124,5 @@ TEST_F(CalibrateCli, MaxViewsThinsEvenly) {
   std::vector<int> pairs;
   for (const auto& v : j["views"]) pairs.push_back(v["pair"].get<int>());
   EXPECT_EQ(pairs, (std::vector<int>{1, 3, 5, 8}));
+  EXPECT_NO_THROW(recon::load_rig(out));
 }

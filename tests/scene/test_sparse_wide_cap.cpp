@@ -56,5 +56,20 @@ TEST(SparseWideWindow, BeyondTheCapIsRefused) {
   }
 }
 
+TEST(SparseWideWindow, ANarrowRadiusBelowOneIsRefused) {
+  for (const int r : {0, -2}) {
+    recon::scene::SparseSettings s;
+    s.lk.radius = r;
+    try {
+      recon::scene::SparseReconstructor sr(test::paper_d3(), s);
+      ADD_FAILURE() << "made with " << r;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("lk.radius " + std::to_string(r) + " must be at least 1 px"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace naneye::sparse_wide_cap_test
