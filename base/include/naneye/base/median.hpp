@@ -2,8 +2,8 @@
 // The upper median: the element at index size / 2 once ordered (the middle one for an odd count, the
 // larger of the middle two for an even one), by nth_element in O(n). Reorders its input: pass a copy
 // to keep the order. The recon parts' robust centres (feature motion votes, dark and flat frames,
-// calibration checks, the paper's division-model estimate) use this one definition. Header-only, no
-// I/O.
+// calibration checks, the paper's division-model estimate, the corner detector's defect filter,
+// lattice step and grid misfit) use this one definition. Header-only, no I/O.
 #include <algorithm>
 #include <iterator>
 #include <ranges>
