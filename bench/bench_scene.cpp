@@ -10,7 +10,7 @@
 //       [--refusals] [--digest] [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z]
 //       [--raw-search] [--wide-radius R] [--wide-step S] [--dense-radius R] [--max-radius R]
 //       [--dense-iterations N] [--gain E_PER_DN] [--read-noise DN] [--no-vignetting] [--supersample N]
-//       [--sparse-only] [--curvature-radius PX] [--wide-false-reject P]
+//       [--sparse-only] [--curvature-radius PX] [--wide-false-reject P] [--nested-only]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
 // features per pair by status. What-ifs, one setting changed: --residual-p P, --max-sigma PX, the
@@ -19,9 +19,10 @@
 // luminance (SparseSettings::search_binomial off); --wide-radius R, the sparse path's wider LK
 // window (0: the narrow window only); --wide-step S, its nested widening's ring, px (sparse.hpp);
 // --curvature-radius PX, the curvature model's neighbourhood (0: off); --wide-false-reject P, the
-// widening's tests' false-reject rate. --sparse-only: the sparse paths alone (~15 s, not ~2 min).
-// The sparse table's last columns: rms(err / depth_sigma_mm) over our good points, the sigma's
-// honesty (0.7-1.4 is the band), and our mean error over the OpenCV path's (the issue's
+// widening's tests' false-reject rate; --nested-only, the ladder for every feature, without the one
+// step to the widest window first (SparseSettings::wide_direct off). --sparse-only: the sparse paths alone
+// (~15 s, not ~2 min). The sparse table's last columns: rms(err / depth_sigma_mm) over our good points, the
+// sigma's honesty (0.7-1.4 is the band), and our mean error over the OpenCV path's (the issue's
 // target: <= 0.5). --dense-radius R: the dense sub-pixel window, fixed;
 // --max-radius R: the largest window the matcher may choose per pair (R = 3: fixed at 3, as before
 // the choice). --dense-iterations N: the dense sub-pixel step's Gauss-Newton passes (default 4). The dense
@@ -385,6 +386,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--min-final-zncc") && i + 1 < argc) ss.min_final_zncc = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-step") && i + 1 < argc) ss.wide_step = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--nested-only")) ss.wide_direct = false;
     if (!std::strcmp(argv[i], "--wide-false-reject") && i + 1 < argc)
       ss.wide_false_reject = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--curvature-radius") && i + 1 < argc)

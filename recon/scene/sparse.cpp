@@ -221,23 +221,28 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
     wide_.emplace_back();
     match(luma, f, out.noise_sigma_dn, p, wide_.back());
     // Counted as one of max_points if the narrow or the widest window's depth is precise enough
-    // (choose_wide may still refuse the wider one: the final count follows it).
+    // (choose_wide may still refuse the wider one: the final count follows it; where the one step
+    // to the widest failed, the ladder it climbs instead may make a few more precise: trimmed below).
     const WideStep* wc = wide_.back().widest();
     out.valid_count +=
         p.valid() && (precise(p.X, p.depth_sigma_mm) || (wc && precise(wc->X, wc->depth_sigma_mm)));
     out.points.push_back(p);
     ++tried;
   }
-  choose_wide(out);
+  choose_wide(luma, out.noise_sigma_dn, out);
   out.valid_count = 0;
-  for (ScenePoint& p : out.points) {
+  for (std::size_t k = 0; k < tried; ++k) {
+    ScenePoint& p = out.points[k];
     if (p.valid() && !precise(p.X, p.depth_sigma_mm)) {
       p.status = PointStatus::imprecise;
       p.X.setConstant(std::numeric_limits<double>::quiet_NaN());
     }
     if (p.valid() && calib_) p.calib_sigma_mm = calib_->depth_sigma_mm(p.X);
     out.valid_count += p.valid();
+    // Matching stops at max_points valid: the features after that one as if never tried.
+    if (out.valid_count == s_.max_points) tried = k + 1;
   }
+  out.points.resize(tried);
   const std::span<std::int64_t> ids(id_scratch_.data(), tried);
   ids_.assign(L, std::span<const Feature>(features_.data(), tried), ids);
   for (std::size_t k = 0; k < tried; ++k) out.points[k].id = ids[k];
@@ -271,9 +276,7 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   // Where each template pixel lands in the right image for a surface facing the camera at the
   // coarse depth (exact model): near the image edges the map bends within the window.
   predict_shape(f, m.w, s_.lk.radius, -1, shape_.data());
-  LkSettings lks = s_.lk;
-  if (luma.bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
-  lks.curvature_gain = s_.curvature_radius_px > 0;
+  const LkSettings lks = lk_settings(luma.bayer);
   const LkResult narrow = refine_affine(L, detector_.gx(), detector_.gy(), f.u, f.v, luma.right_spline_view(),
                                         usable_[1].data(), m.px, A0, shape_.data(), lks);
   if (!fit_accepted(narrow, s_.lk.radius, noise_sigma_dn)) {
@@ -312,7 +315,19 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   displacement_derivatives(f, m.w, wc);  // dpdw also gives the shift tests their direction
   wc.narrow_gain = lk.curvature_gain;
   wc.narrow_has_gain = lk.has_curvature_gain;
-  widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wc);
+  wc.w = m.w;
+  wc.A0 = A0;
+  wc.narrow = narrow;
+  const bool direct = direct_first();
+  widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, direct ? 0 : wide_radii_.size(),
+              direct, wc);
+}
+
+LkSettings SparseReconstructor::lk_settings(bool bayer) const {
+  LkSettings lks = s_.lk;
+  if (bayer) lks.noise_kernel = LkSettings::binomial3();  // raw_to_luminance's filter
+  lks.curvature_gain = s_.curvature_radius_px > 0;
+  return lks;
 }
 
 double SparseReconstructor::ssr_noise_bound(int radius) const {

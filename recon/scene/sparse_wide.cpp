@@ -39,6 +39,12 @@
 // share the model predicts for it (the two windows' biases differ), at a variance that adds the
 // model's, and the match kept is corrected by its own bias. They run in choose_wide, once every
 // feature's narrow match is known (the model is the neighbours'); test 1 in widen.
+// One step first (SparseSettings::wide_direct, 2026-12-07, fourteenth session): with the model the
+// single step to the widest window holds its sigmas, so every feature first tries it alone (one fit
+// where the ladder took three: a plane's features mostly pass), and only those it refuses climb
+// the ladder below it, a curvature misfit too (its tests are its neighbours' pools). A refused one
+// step's disagreement stays on the point unless the ladder keeps a wider window (docs/scene.md,
+// "One step first").
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -97,30 +103,42 @@ void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int
 void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, double w,
                                       const Eigen::Matrix2d& A0, const LkSettings& lks,
                                       const LkResult& narrow, const Eigen::Vector2d& left_px,
-                                      double noise_sigma_dn, WideCandidate& wc) {
-  LkResult fits[2];  // this step's and the one before, alternately (as shape_wide_)
-  const LkResult* inner = &narrow;
-  const Eigen::Vector2d* inner_shape = shape_.data();
-  for (std::size_t k = 0; k < wide_radii_.size(); ++k) {
-    Eigen::Vector2d* shape = shape_wide_[k % 2].data();
-    LkResult& fit = fits[k % 2];
-    WideStep& st = wc.step[k];
-    fit = widen(luma, f, w, A0, lks, k, *inner, inner_shape, shape, noise_sigma_dn, st);
-    if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return;
+                                      double noise_sigma_dn, std::size_t steps, bool direct,
+                                      WideCandidate& wc) {
+  const auto keep = [&](const LkResult& fit, WideStep& st) {
+    if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return false;
     st.usable = true;
     st.right_px = fit.px;
     st.cov = fit.cov;
     st.zncc = fit.zncc;
+    return true;
+  };
+  if (direct) {
+    keep(widen(luma, f, w, A0, lks, wide_radii_.size() - 1, s_.lk.radius, narrow, shape_.data(),
+               shape_wide_[0].data(), noise_sigma_dn, wc.direct),
+         wc.direct);
+    return;
+  }
+  LkResult fits[2];  // this step's and the one before, alternately (as shape_wide_)
+  const LkResult* inner = &narrow;
+  const Eigen::Vector2d* inner_shape = shape_.data();
+  for (std::size_t k = 0; k < steps; ++k) {
+    Eigen::Vector2d* shape = shape_wide_[k % 2].data();
+    LkResult& fit = fits[k % 2];
+    WideStep& st = wc.step[k];
+    fit = widen(luma, f, w, A0, lks, k, k == 0 ? s_.lk.radius : wide_radii_[k - 1], *inner, inner_shape,
+                shape, noise_sigma_dn, st);
+    if (!keep(fit, st)) return;
     inner = &fit;
     inner_shape = shape;
   }
 }
 
 LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, double w,
-                                    const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k,
+                                    const Eigen::Matrix2d& A0, const LkSettings& lks, std::size_t k, int rn,
                                     const LkResult& narrow, const Eigen::Vector2d* inner_shape,
                                     Eigen::Vector2d* shape, double noise_sigma_dn, WideStep& st) {
-  const int rn = k == 0 ? s_.lk.radius : wide_radii_[k - 1], rw = wide_radii_[k];
+  const int rw = wide_radii_[k];
   if (!usable_wide_[k][0][static_cast<std::size_t>(f.v) * luma.width + f.u]) return {};
   const int sn = 2 * rn + 1, sw = 2 * rw + 1;
   for (int dr = -rn; dr <= rn; ++dr)
@@ -156,67 +174,117 @@ LkResult SparseReconstructor::widen(const StereoLuma& luma, const Feature& f, do
   return wide;
 }
 
-void SparseReconstructor::choose_wide(SparseResult& out) {
+void SparseReconstructor::choose_wide(const StereoLuma& luma, double noise_sigma_dn, SparseResult& out) {
   fit_curvature(out);
-  for (std::size_t step = 0; step < wide_radii_.size(); ++step) {
-    // Every feature with this step's shift test pools into it, kept or not (the statistic holds
-    // under the model either way; more of them see a surface's common bias sooner). The test is on
-    // the shift less the curvature model's share of it, at a variance that takes the model's.
-    std::fill(cell_point_.begin(), cell_point_.end(), -1);
-    bool any = false;
-    for (std::size_t k = 0; k < wide_.size(); ++k) {
-      WideCandidate& wc = wide_[k];
-      WideStep& st = wc.step[step];
-      st.hausman = -1;
-      if (!st.tested) continue;
-      const Eigen::Vector2d e = wc.dpdw.normalized();
-      Eigen::Vector2d d = st.d;
-      double ve = e.dot(st.V * e);
-      const bool inner_gain = step == 0 ? wc.narrow_has_gain : wc.step[step - 1].has_gain;
-      if (wc.has_curvature && st.has_gain && inner_gain) {
-        Eigen::Matrix<double, 2, 5> jw, jn;
-        d -= curvature_bias(wc, st.gain, &jw) -
-             curvature_bias(wc, step == 0 ? wc.narrow_gain : wc.step[step - 1].gain, &jn);
-        const Eigen::Matrix<double, 5, 1> a = (jw - jn).transpose() * e;
-        ve += a.dot(wc.theta_cov * a);
-      }
-      st.hausman = e.dot(d) * e.dot(d) / ve;
-      st.d_along = e.dot(d);
+  if (!direct_first()) {
+    for (std::size_t step = 0; step < wide_radii_.size(); ++step) choose_step(out, static_cast<int>(step));
+    return;
+  }
+  choose_step(out, kDirect);
+  // The ladder below the widest, where the one step was not kept. A curvature misfit keeps no
+  // wider window, but climbs too where a feature that may keep one lies within the pool's radius:
+  // its tests are that feature's pool (without them a feature amid misfits pooled with itself
+  // alone, and the height field's few that fell back kept 13 x 13 and 17 x 17 windows at
+  // rms(err/sigma) 1.6-2.0). Beyond every such radius its fits would enter no test.
+  const auto climbs = [&](std::size_t k) { return out.points[k].valid() && !wide_[k].direct_kept; };
+  std::fill(cell_point_.begin(), cell_point_.end(), -1);
+  for (std::size_t k = 0; k < wide_.size(); ++k)
+    if (climbs(k) && !wide_[k].curvature_misfit)
       cell_point_[point_cell(out.points[k].left_px)] = static_cast<int>(k);
-      any = true;
+  const LkSettings lks = lk_settings(luma.bayer);
+  for (std::size_t k = 0; k < wide_.size(); ++k) {
+    WideCandidate& wc = wide_[k];
+    const ScenePoint& p = out.points[k];
+    if (!climbs(k)) continue;
+    if (wc.curvature_misfit) {
+      bool pooled = false;
+      for_each_near(out, p.left_px, s_.wide_pool_radius_px, [&](std::size_t) { pooled = true; });
+      if (!pooled) continue;
     }
-    if (!any) break;
-    for (std::size_t k = 0; k < wide_.size(); ++k) {
-      ScenePoint& p = out.points[k];
-      WideCandidate& wc = wide_[k];
-      const WideStep& st = wc.step[step];
-      if (!p.valid() || wc.chosen != static_cast<int>(step) || !st.usable || wc.curvature_misfit) continue;
-      if (st.hausman > wide_chi1_) {
-        disagree(wc, p, st.d_along);
-        continue;
-      }
-      double sum = 0;
-      int count = 0;
-      for_each_near(out, p.left_px, s_.wide_pool_radius_px, [&](std::size_t j) {
-        sum += wide_[j].step[step].hausman;
-        ++count;
-      });
-      if (sum > count * chi2_upper_ratio(count, wide_z_)) continue;
-      Eigen::Vector2d px = st.right_px;
-      Eigen::Matrix2d cov = st.cov;
-      Eigen::Vector3d X = st.X;
-      double sigma = st.depth_sigma_mm;
-      if (wc.has_curvature && st.has_gain &&
-          !correct_for_curvature(wc, p.left_px, st.gain, px, cov, X, sigma))
-        continue;
-      wc.kept_cov = cov;
-      p.right_px = px;
-      p.X = X;
-      p.depth_sigma_mm = sigma;
-      p.zncc = st.zncc;
-      p.window_radius_px = wide_radii_[step];
-      wc.chosen = static_cast<int>(step) + 1;
+    const Feature& f = features_[k];
+    predict_shape(f, wc.w, s_.lk.radius, -1, shape_.data());
+    widen_steps(luma, f, wc.w, wc.A0, lks, wc.narrow, p.left_px, noise_sigma_dn, wide_radii_.size() - 1,
+                false, wc);
+  }
+  for (std::size_t step = 0; step + 1 < wide_radii_.size(); ++step) choose_step(out, static_cast<int>(step));
+}
+
+void SparseReconstructor::choose_step(SparseResult& out, int k) {
+  const auto step_of = [k](WideCandidate& wc) -> WideStep& {
+    return k == kDirect ? wc.direct : wc.step[static_cast<std::size_t>(k)];
+  };
+  const auto inner_gain = [k](const WideCandidate& wc, bool& has) -> const CurvatureGain& {
+    if (k <= 0) {
+      has = wc.narrow_has_gain;
+      return wc.narrow_gain;
     }
+    const WideStep& in = wc.step[static_cast<std::size_t>(k - 1)];
+    has = in.has_gain;
+    return in.gain;
+  };
+  // Every feature with this step's shift test pools into it, kept or not (the statistic holds
+  // under the model either way; more of them see a surface's common bias sooner). The test is on
+  // the shift less the curvature model's share of it, at a variance that takes the model's.
+  std::fill(cell_point_.begin(), cell_point_.end(), -1);
+  bool any = false;
+  for (std::size_t j = 0; j < wide_.size(); ++j) {
+    WideCandidate& wc = wide_[j];
+    WideStep& st = step_of(wc);
+    st.hausman = -1;
+    if (!st.tested) continue;
+    const Eigen::Vector2d e = wc.dpdw.normalized();
+    Eigen::Vector2d d = st.d;
+    double ve = e.dot(st.V * e);
+    bool inner_has = false;
+    const CurvatureGain& gain_in = inner_gain(wc, inner_has);
+    if (wc.has_curvature && st.has_gain && inner_has) {
+      Eigen::Matrix<double, 2, 5> jw, jn;
+      d -= curvature_bias(wc, st.gain, &jw) - curvature_bias(wc, gain_in, &jn);
+      const Eigen::Matrix<double, 5, 1> a = (jw - jn).transpose() * e;
+      ve += a.dot(wc.theta_cov * a);
+    }
+    st.hausman = e.dot(d) * e.dot(d) / ve;
+    st.d_along = e.dot(d);
+    cell_point_[point_cell(out.points[j].left_px)] = static_cast<int>(j);
+    any = true;
+  }
+  if (!any) return;
+  const int radius = wide_radii_[k == kDirect ? wide_radii_.size() - 1 : static_cast<std::size_t>(k)];
+  for (std::size_t j = 0; j < wide_.size(); ++j) {
+    ScenePoint& p = out.points[j];
+    WideCandidate& wc = wide_[j];
+    const WideStep& st = step_of(wc);
+    if (!p.valid() || wc.chosen != std::max(k, 0) || !st.usable || wc.curvature_misfit) continue;
+    if (st.hausman > wide_chi1_) {
+      // The one step's disagreement stands unless the ladder keeps a wider window; the larger of
+      // the two where the ladder's own test fails too.
+      disagree(wc, p, std::max(std::abs(st.d_along), p.window_disagreement_px));
+      continue;
+    }
+    double sum = 0;
+    int count = 0;
+    for_each_near(out, p.left_px, s_.wide_pool_radius_px, [&](std::size_t i) {
+      sum += step_of(wide_[i]).hausman;
+      ++count;
+    });
+    if (sum > count * chi2_upper_ratio(count, wide_z_)) continue;
+    Eigen::Vector2d px = st.right_px;
+    Eigen::Matrix2d cov = st.cov;
+    Eigen::Vector3d X = st.X;
+    double sigma = st.depth_sigma_mm;
+    if (wc.has_curvature && st.has_gain && !correct_for_curvature(wc, p.left_px, st.gain, px, cov, X, sigma))
+      continue;
+    wc.kept_cov = cov;
+    p.right_px = px;
+    p.X = X;
+    p.depth_sigma_mm = sigma;
+    p.zncc = st.zncc;
+    p.window_radius_px = radius;
+    p.window_disagreement_px = 0;
+    if (k == kDirect)
+      wc.direct_kept = true;
+    else
+      wc.chosen = k + 1;
   }
 }
 

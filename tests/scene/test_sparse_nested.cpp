@@ -22,6 +22,7 @@ struct WindowFigures {
   int points = 0;  // valid points whose match came from this window
   int good = 0;    // of them, within 5 % of the truth
   double z2 = 0;   // sum of (dZ / sigma)^2 over the good ones
+  double rel = 0;  // sum of |dZ| / Z over the good ones
   double rms() const { return std::sqrt(z2 / std::max(1, good)); }
 };
 
@@ -51,6 +52,7 @@ std::map<int, WindowFigures> by_window(const std::string& preset, const recon::s
         if (!(std::abs(q.X.z() - zt) <= 0.05 * zt)) continue;
         ++w.good;
         w.z2 += std::pow((q.X.z() - zt) / q.depth_sigma_mm, 2);
+        w.rel += std::abs(q.X.z() - zt) / zt;
       }
     }
   }
@@ -111,7 +113,9 @@ TEST(SparseNestedWidening, APlaneGoesWideTheHeightFieldStopsEarly) {
 // The points kept after a failed shift test are a selection: on a surface the affine fits, the
 // test fails where the narrower match's noise is large, so with its own sigma their rms(err/sigma)
 // was 1.6-2.3 (bench_scene --refusals, every condition); their sigma now takes the disagreement
-// (sparse_wide.cpp). Too few per preset; pooled over the four.
+// (sparse_wide.cpp). Too few per preset; pooled over the four: 13 points, rms 0.96 (2.53 with the
+// disagreement left out of their sigma; 48 points before the one step first, SparseSettings::
+// wide_direct, which leaves fewer narrow matches behind a failed test).
 TEST(SparseNestedWidening, EveryWindowsSigmasHold) {
   WindowFigures disagreed;
   for (const char* preset : {"plane", "plane-far", "sphere", "height"})
@@ -126,7 +130,7 @@ TEST(SparseNestedWidening, EveryWindowsSigmasHold) {
       EXPECT_LE(w.rms(), 1.4) << preset << " radius " << r;
     }
   std::printf("windows disagreed, pooled: %d points, rms(err/sigma) %.2f\n", disagreed.good, disagreed.rms());
-  ASSERT_GE(disagreed.good, 20);
+  ASSERT_GE(disagreed.good, 10);
   EXPECT_GE(disagreed.rms(), 0.7);
   EXPECT_LE(disagreed.rms(), 1.4);
 }
@@ -152,6 +156,59 @@ TEST(SparseNestedWidening, TheSpheresCurvatureStopsTheNestingNotTheSingleStep) {
   ASSERT_TRUE(modelled.count(10));
   ASSERT_GE(modelled.at(10).good, 100);
   EXPECT_LE(modelled.at(10).rms(), 1.4);
+}
+
+// SparseSettings::wide_direct: the one step straight to 21 x 21 first, the ladder only where its
+// tests refuse it. The features it refuses still reach 13 x 13 and 17 x 17 (the fallback runs),
+// and over the whole render the depth error is no worse than the ladder's for every feature,
+// whose three fits it mostly replaces by one (bench_scene --nested-only for the time).
+TEST(SparseNestedWidening, OneStepFirstFallsBackToTheLadder) {
+  const auto total = [](const std::map<int, WindowFigures>& f) {
+    WindowFigures all;
+    for (const auto& [r, w] : f) {
+      if (r == kDisagreed) continue;
+      all.points += w.points;
+      all.good += w.good;
+      all.rel += w.rel;
+    }
+    return all;
+  };
+  recon::scene::SparseSettings nested_only = ladder(10, 2);
+  nested_only.wide_direct = false;
+  for (const char* preset : {"plane", "sphere"}) {
+    const auto direct = by_window(preset, ladder(10, 2), nullptr, 2);
+    const auto nested = by_window(preset, nested_only, nullptr, 2);
+    const WindowFigures d = total(direct), n = total(nested);
+    std::printf("%-7s one step first: %d good, mean |dZ|/Z %.4f %%; ladder only: %d good, %.4f %%\n", preset,
+                d.good, 100 * d.rel / d.good, n.good, 100 * n.rel / n.good);
+    ASSERT_GT(d.good, 400) << preset;
+    EXPECT_GE(d.good, n.good - 5) << preset;
+    EXPECT_LE(d.rel / d.good, 1.05 * n.rel / n.good) << preset;
+    EXPECT_GT(direct.count(10) ? direct.at(10).points : 0, d.points / 2) << preset;
+    EXPECT_GT((direct.count(6) ? direct.at(6).points : 0) + (direct.count(8) ? direct.at(8).points : 0), 10)
+        << preset << ": the ladder below the widest";
+  }
+}
+
+// Matching stops at max_points valid points (counted with the narrow or the widest window's
+// precision), but the ladder the one step falls back to can make a few more precise later: the
+// result is trimmed after the max_points-th valid point, as if the features after it were never
+// tried (without the trim plane-far gave 513-514 per pair here).
+TEST(SparseNestedWidening, TheFallbackKeepsTheCountAtMaxPoints) {
+  recon::scene::SparseReconstructor sr(test::paper_d3());
+  const int max_points = sr.settings().max_points;
+  for (std::uint64_t seed = 5; seed < 9; ++seed) {
+    const sim::TexturedPair& p = test::textured_pair("plane-far", false, seed);
+    recon::scene::SparseResult out;
+    sr.reconstruct(sim::raw_view(p.left), sim::raw_view(p.right), out);
+    int valid = 0;
+    for (const auto& q : out.points) valid += q.valid();
+    EXPECT_EQ(valid, out.valid_count) << seed;
+    EXPECT_LE(out.valid_count, max_points) << seed;
+    if (out.valid_count == max_points) {
+      EXPECT_TRUE(out.points.back().valid()) << seed << ": the last one kept is the max_points-th valid";
+    }
+  }
 }
 
 TEST(SparseNestedWidening, AStepBelowOnePixelIsRefused) {

@@ -63,9 +63,17 @@ struct SparseSettings {
   // px; the window widens from lk.radius to wide_radius by rings this wide (9 -> 13 -> 17 -> 21),
   // each step's match held to the three tests against the step before it and kept only if every
   // narrower step was: a plane goes on to the widest, a curved surface stops where its misfit shows.
-  // One step straight to 21 x 21 tests its fit against the 9 x 9 one's noise, which hides the
-  // misfit a test against 17 x 17 shows (the sphere: rms(err/sigma) 2.14 at 21 x 21 in one step).
+  // Without the curvature model (curvature_radius_px 0) one step straight to 21 x 21 tests its fit
+  // against the 9 x 9 one's noise, which hides the misfit a test against 17 x 17 shows (the
+  // sphere: rms(err/sigma) 2.14 at 21 x 21 in one step); with it, the one step holds (wide_direct).
   int wide_step = 2;
+  // true (with the curvature model on and a ladder of two steps or more): each feature first tries
+  // the widest window in one step from lk.radius, and only where that step's tests refuse it climbs
+  // the nested ladder above, up to the ring below the widest. A plane's features mostly pass and
+  // pay one wide fit instead of three; a curved surface's fall back and stop where their misfit
+  // shows. Measured against the ladder for every feature: the sparse path ~0.7x the time, its
+  // error the same or lower in every bench_scene condition (docs/scene.md, "One step first").
+  bool wide_direct = true;
   // Each of the wider window's three tests (its outer ring's residual against the narrow window's
   // noise, its shift against the narrow one's, and that shift test pooled over the neighbourhood;
   // sparse_wide.cpp) refuses this share of the features where the affine holds: the price is their
@@ -204,9 +212,17 @@ class SparseReconstructor {
     bool has_gain = false;  // LkResult::has_curvature_gain
   };
   // The widening's steps for one feature tried, narrowest first; `chosen`: how many choose_wide kept.
+  // `direct`: the one step from the narrow window to the widest (SparseSettings::wide_direct),
+  // `direct_kept` where choose_wide kept it; `w`, `A0`, `narrow`: the coarse inverse depth, the
+  // predicted affine and the narrow fit, from which choose_wide climbs the ladder where it was not.
   struct WideCandidate {
     std::array<WideStep, kMaxLkRadius> step;
     int chosen = 0;
+    WideStep direct;
+    bool direct_kept = false;
+    double w = 0;
+    Eigen::Matrix2d A0 = Eigen::Matrix2d::Identity();
+    LkResult narrow;
     // The covariance of the match the point holds (px^2): the narrow one's, then each chosen step's
     // after its curvature correction; a failed shift test widens it by the disagreement.
     Eigen::Matrix2d kept_cov = Eigen::Matrix2d::Zero();
@@ -235,6 +251,7 @@ class SparseReconstructor {
     Eigen::Matrix<double, 5, 5> theta_cov = Eigen::Matrix<double, 5, 5>::Zero();
     // The widest step that passed its own tests, or nullptr.
     const WideStep* widest() const {
+      if (direct.usable) return &direct;
       const WideStep* w = nullptr;
       for (const WideStep& st : step)
         if (st.usable) w = &st;
@@ -264,7 +281,17 @@ class SparseReconstructor {
   void init_wide();
   // Each valid point takes its widest step's match whose neighbourhood's pooled shift test passes
   // at that step and every narrower one (sparse_wide.cpp).
-  void choose_wide(SparseResult& out);
+  void choose_wide(const StereoLuma& luma, double noise_sigma_dn, SparseResult& out);
+  // One step's tests over every feature that has it (kDirect: WideCandidate::direct); each valid
+  // point that holds the step inside keeps this one where they pass.
+  static constexpr int kDirect = -1;
+  void choose_step(SparseResult& out, int k);
+  // SparseSettings::wide_direct where it holds: the one step to the widest window needs the
+  // curvature model (without it the sphere's misfit hides in the narrow window's noise) and a
+  // ladder to fall back on.
+  bool direct_first() const { return s_.wide_direct && s_.curvature_radius_px > 0 && wide_radii_.size() > 1; }
+  // The LK settings of every fit of this pair (its noise kernel, the curvature gain).
+  LkSettings lk_settings(bool bayer) const;
   // Each valid point's curvature model from its neighbours' narrow matches (sparse_curvature.cpp).
   void fit_curvature(SparseResult& out);
   // wc's model from the neighbourhood's quadric (its parameters a, g, H and their covariance),
@@ -285,20 +312,21 @@ class SparseReconstructor {
   // parameters.
   static Eigen::Vector2d curvature_bias(const WideCandidate& wc, const CurvatureGain& gain,
                                         Eigen::Matrix<double, 2, 5>* jacobian = nullptr);
-  // The nested widening of `narrow` (wide_radii_), into wc, until a step fails its own tests.
+  // The nested widening of `narrow` over wide_radii_'s first `steps`, into wc, until a step fails
+  // its own tests; `direct`: the one step to the widest instead, into wc.direct.
   void widen_steps(const StereoLuma& luma, const Feature& f, double w, const Eigen::Matrix2d& A0,
                    const LkSettings& lks, const LkResult& narrow, const Eigen::Vector2d& left_px,
-                   double noise_sigma_dn, WideCandidate& wc);
+                   double noise_sigma_dn, std::size_t steps, bool direct, WideCandidate& wc);
   // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
   // right image for a surface facing the camera at inverse depth w (exact model), relative to the
   // centre's place, row-major over the (2 rad + 1)^2 window.
   void predict_shape(const Feature& f, double w, int rad, int skip, Eigen::Vector2d* out) const;
-  // Step k's refinement of `narrow` (the step before, radius wide_radii_[k - 1] or lk.radius; its
-  // template shape inner_shape) where the feature's window fits and its ring passes (sparse_wide.cpp),
-  // else not converged; its template shape into `shape`; into `st` its shift against `narrow` and
-  // that shift's covariance (`tested`), for choose_wide's tests.
+  // The refinement of `narrow` (radius rn: the step before, wide_radii_[k - 1] or lk.radius; its
+  // template shape inner_shape) to wide_radii_[k], where the feature's window fits and its ring
+  // passes (sparse_wide.cpp), else not converged; its template shape into `shape`; into `st` its
+  // shift against `narrow` and that shift's covariance (`tested`), for choose_wide's tests.
   LkResult widen(const StereoLuma& luma, const Feature& f, double w, const Eigen::Matrix2d& A0,
-                 const LkSettings& lks, std::size_t k, const LkResult& narrow,
+                 const LkSettings& lks, std::size_t k, int rn, const LkResult& narrow,
                  const Eigen::Vector2d* inner_shape, Eigen::Vector2d* shape, double noise_sigma_dn,
                  WideStep& st);
 
