@@ -318,9 +318,14 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   wc.w = m.w;
   wc.A0 = A0;
   wc.narrow = narrow;
-  const bool direct = direct_first();
-  widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, direct ? 0 : wide_radii_.size(),
-              direct, wc);
+  if (!direct_first()) {
+    widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wide_radii_.size(), wc);
+    return;
+  }
+  // The one step from the narrow window to the widest (its ring skips the narrow window's pixels).
+  take_fit(widen(luma, f, m.w, A0, lks, wide_radii_.size() - 1, s_.lk.radius, narrow, shape_.data(),
+                 shape_wide_[0].data(), noise_sigma_dn, wc.direct),
+           p.left_px, wc.direct);
 }
 
 LkSettings SparseReconstructor::lk_settings(bool bayer) const {

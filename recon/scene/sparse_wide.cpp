@@ -100,25 +100,19 @@ void SparseReconstructor::predict_shape(const Feature& f, double w, int rad, int
   }
 }
 
+bool SparseReconstructor::take_fit(const LkResult& fit, const Eigen::Vector2d& left_px, WideStep& st) const {
+  if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return false;
+  st.usable = true;
+  st.right_px = fit.px;
+  st.cov = fit.cov;
+  st.zncc = fit.zncc;
+  return true;
+}
+
 void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, double w,
                                       const Eigen::Matrix2d& A0, const LkSettings& lks,
                                       const LkResult& narrow, const Eigen::Vector2d& left_px,
-                                      double noise_sigma_dn, std::size_t steps, bool direct,
-                                      WideCandidate& wc) {
-  const auto keep = [&](const LkResult& fit, WideStep& st) {
-    if (!fit.converged || !triangulate_match(left_px, fit.px, fit.cov, st.X, st.depth_sigma_mm)) return false;
-    st.usable = true;
-    st.right_px = fit.px;
-    st.cov = fit.cov;
-    st.zncc = fit.zncc;
-    return true;
-  };
-  if (direct) {
-    keep(widen(luma, f, w, A0, lks, wide_radii_.size() - 1, s_.lk.radius, narrow, shape_.data(),
-               shape_wide_[0].data(), noise_sigma_dn, wc.direct),
-         wc.direct);
-    return;
-  }
+                                      double noise_sigma_dn, std::size_t steps, WideCandidate& wc) {
   LkResult fits[2];  // this step's and the one before, alternately (as shape_wide_)
   const LkResult* inner = &narrow;
   const Eigen::Vector2d* inner_shape = shape_.data();
@@ -128,7 +122,7 @@ void SparseReconstructor::widen_steps(const StereoLuma& luma, const Feature& f, 
     WideStep& st = wc.step[k];
     fit = widen(luma, f, w, A0, lks, k, k == 0 ? s_.lk.radius : wide_radii_[k - 1], *inner, inner_shape,
                 shape, noise_sigma_dn, st);
-    if (!keep(fit, st)) return;
+    if (!take_fit(fit, left_px, st)) return;
     inner = &fit;
     inner_shape = shape;
   }
@@ -203,8 +197,7 @@ void SparseReconstructor::choose_wide(const StereoLuma& luma, double noise_sigma
     }
     const Feature& f = features_[k];
     predict_shape(f, wc.w, s_.lk.radius, -1, shape_.data());
-    widen_steps(luma, f, wc.w, wc.A0, lks, wc.narrow, p.left_px, noise_sigma_dn, wide_radii_.size() - 1,
-                false, wc);
+    widen_steps(luma, f, wc.w, wc.A0, lks, wc.narrow, p.left_px, noise_sigma_dn, wide_radii_.size() - 1, wc);
   }
   for (std::size_t step = 0; step + 1 < wide_radii_.size(); ++step) choose_step(out, static_cast<int>(step));
 }

@@ -313,10 +313,12 @@ class SparseReconstructor {
   static Eigen::Vector2d curvature_bias(const WideCandidate& wc, const CurvatureGain& gain,
                                         Eigen::Matrix<double, 2, 5>* jacobian = nullptr);
   // The nested widening of `narrow` over wide_radii_'s first `steps`, into wc, until a step fails
-  // its own tests; `direct`: the one step to the widest instead, into wc.direct.
+  // its own tests.
   void widen_steps(const StereoLuma& luma, const Feature& f, double w, const Eigen::Matrix2d& A0,
                    const LkSettings& lks, const LkResult& narrow, const Eigen::Vector2d& left_px,
-                   double noise_sigma_dn, std::size_t steps, bool direct, WideCandidate& wc);
+                   double noise_sigma_dn, std::size_t steps, WideCandidate& wc);
+  // A wider window's fit into st where it converged and triangulates (`usable`); false otherwise.
+  bool take_fit(const LkResult& fit, const Eigen::Vector2d& left_px, WideStep& st) const;
   // Where each template pixel at Chebyshev distance in (skip, rad] from the feature lands in the
   // right image for a surface facing the camera at inverse depth w (exact model), relative to the
   // centre's place, row-major over the (2 rad + 1)^2 window.
