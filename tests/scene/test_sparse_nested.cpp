@@ -193,7 +193,7 @@ TEST(SparseNestedWidening, OneStepFirstFallsBackToTheLadder) {
 // Matching stops at max_points valid points (counted with the narrow or the widest window's
 // precision), but the ladder the one step falls back to can make a few more precise later: the
 // result is trimmed after the max_points-th valid point, as if the features after it were never
-// tried (without the trim plane-far gave 513-514 per pair here).
+// tried (without the trim all four renders here had more; bench_scene's plane-far 513-514 per pair).
 TEST(SparseNestedWidening, TheFallbackKeepsTheCountAtMaxPoints) {
   recon::scene::SparseReconstructor sr(test::paper_d3());
   const int max_points = sr.settings().max_points;
