@@ -315,13 +315,14 @@ void SparseReconstructor::match(const StereoLuma& luma, const Feature& f, double
   displacement_derivatives(f, m.w, wc);  // dpdw also gives the shift tests their direction
   wc.narrow_gain = lk.curvature_gain;
   wc.narrow_has_gain = lk.has_curvature_gain;
-  wc.w = m.w;
-  wc.A0 = A0;
-  wc.narrow = narrow;
   if (!direct_first()) {
     widen_steps(luma, f, m.w, A0, lks, narrow, p.left_px, noise_sigma_dn, wide_radii_.size(), wc);
     return;
   }
+  // What choose_wide climbs the ladder from where the one step is refused.
+  wc.w = m.w;
+  wc.A0 = A0;
+  wc.narrow = narrow;
   // The one step from the narrow window to the widest (its ring skips the narrow window's pixels).
   take_fit(widen(luma, f, m.w, A0, lks, wide_radii_.size() - 1, s_.lk.radius, narrow, shape_.data(),
                  shape_wide_[0].data(), noise_sigma_dn, wc.direct),
