@@ -115,11 +115,15 @@ void bspline_coefficients(const GrayView& in, const ActiveRect& a, float* out, f
   }
 }
 
-double bspline_noise_autocorrelation(double f, int lag) {
-  constexpr int kSteps = 256, kReach = 24;  // |z1|^24 ~ 2e-14: the cardinal spline's taps beyond are 0
-  using Table = std::array<std::array<double, kSteps + 1>, kNoiseLagReach + 1>;
+namespace {
+constexpr int kNoiseSteps = 256;
+using NoiseTable = std::array<std::array<double, kNoiseSteps + 1>, kNoiseLagReach + 1>;
+
+const NoiseTable& noise_table() {
+  constexpr int kSteps = kNoiseSteps,
+                kReach = 24;  // |z1|^24 ~ 2e-14: the cardinal spline's taps beyond are 0
   // Immutable after its first use (a function-local static: built once, thread-safe).
-  static const Table table = [] {
+  static const NoiseTable table = [] {
     const auto beta3 = [](double x) {
       x = std::abs(x);
       return x < 1 ? 2.0 / 3.0 - x * x + 0.5 * x * x * x : x < 2 ? (2 - x) * (2 - x) * (2 - x) / 6 : 0.0;
@@ -131,7 +135,7 @@ double bspline_noise_autocorrelation(double f, int lag) {
       for (int k = k0; k <= k0 + 3; ++k) v += prefilter_tap(k) * beta3(x - k);
       return v;
     };
-    Table t{};
+    NoiseTable t{};
     for (int i = 0; i <= kSteps; ++i) {
       const double fi = static_cast<double>(i) / kSteps;
       double taps[2 * kReach + 1 + kNoiseLagReach];
@@ -144,14 +148,29 @@ double bspline_noise_autocorrelation(double f, int lag) {
     }
     return t;
   }();
-  lag = std::abs(lag);
-  if (lag > kNoiseLagReach)
-    throw std::invalid_argument("bspline_noise_autocorrelation: lag beyond the table");
-  const double x = std::clamp(f, 0.0, 1.0) * kSteps;
-  const int i = std::min(static_cast<int>(x), kSteps - 1);
+  return table;
+}
+
+// Linear between the table's entries at f (clamped to [0, 1]).
+double noise_entry(const NoiseTable& table, double f, int lag) {
+  const double x = std::clamp(f, 0.0, 1.0) * kNoiseSteps;
+  const int i = std::min(static_cast<int>(x), kNoiseSteps - 1);
   const auto& row = table[static_cast<std::size_t>(lag)];
   return row[static_cast<std::size_t>(i)] +
          (x - i) * (row[static_cast<std::size_t>(i) + 1] - row[static_cast<std::size_t>(i)]);
+}
+}  // namespace
+
+double bspline_noise_autocorrelation(double f, int lag) {
+  lag = std::abs(lag);
+  if (lag > kNoiseLagReach)
+    throw std::invalid_argument("bspline_noise_autocorrelation: lag beyond the table");
+  return noise_entry(noise_table(), f, lag);
+}
+
+void bspline_noise_autocorrelations(double f, double (&out)[kNoiseLagReach + 1]) {
+  const NoiseTable& table = noise_table();
+  for (int lag = 0; lag <= kNoiseLagReach; ++lag) out[lag] = noise_entry(table, f, lag);
 }
 
 double bspline_knot_derivative_tap(int k) {

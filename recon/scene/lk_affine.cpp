@@ -50,17 +50,32 @@ Eigen::Matrix<double, K, K> kernel_gram(const std::array<float, 9>& b, const flo
   // Each input at (2, 2) of a zero plane of side + 4 rows: out(r, c) = sum b(i, j) in(r + i, c + j).
   alignas(16) float pad[(kMaxSide + 4) * (kMaxStride + 4)] = {};
   alignas(32) float f[K][kMaxGrown8];
+  // The kernel in registers: read through the reference, b might alias the planes for all the compiler
+  // knows, and it reloaded and re-splatted every tap (~30 % of the Bayer sparse path in callgrind).
+  V4 bk[9];
+  for (int i = 0; i < 9; ++i) bk[i] = simd::splat<V4>(b[static_cast<std::size_t>(i)]);
   for (int e = 0; e < K; ++e) {
     for (int r = 0; r < side; ++r)
       for (int c = 0; c < side; ++c) pad[(r + 2) * in_stride + c + 2] = v[e][r * side + c];
-    for (int r = 0; r < g; ++r)
+    for (int r = 0; r < g; ++r) {
+      const float* p0 = &pad[r * in_stride];
+      const float* p1 = p0 + in_stride;
+      const float* p2 = p1 + in_stride;
       for (int c = 0; c < stride; c += 4) {  // columns >= g read only the zero padding: stay 0
+        // The taps in the order of the plain double loop (rows, then columns): the same bits.
         V4 acc = V4{};
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            acc += b[static_cast<std::size_t>(i * 3 + j)] * simd::load<V4>(&pad[(r + i) * in_stride + c + j]);
+        acc += bk[0] * simd::load<V4>(p0 + c);
+        acc += bk[1] * simd::load<V4>(p0 + c + 1);
+        acc += bk[2] * simd::load<V4>(p0 + c + 2);
+        acc += bk[3] * simd::load<V4>(p1 + c);
+        acc += bk[4] * simd::load<V4>(p1 + c + 1);
+        acc += bk[5] * simd::load<V4>(p1 + c + 2);
+        acc += bk[6] * simd::load<V4>(p2 + c);
+        acc += bk[7] * simd::load<V4>(p2 + c + 1);
+        acc += bk[8] * simd::load<V4>(p2 + c + 2);
         simd::store(&f[e][r * stride + c], acc);
       }
+    }
     for (int k = g * stride; k < n8; ++k) f[e][k] = 0.f;
   }
   const float* filtered[K];
@@ -80,12 +95,18 @@ Eigen::Matrix2d kernel_outer(const std::array<float, 9>& b, const float* x, cons
 void project(const Eigen::Matrix<double, 2, 6>& P, const float (&sd)[6][kMaxN8], int n8, float* px, float* py,
              bool accumulate = false) {
   using simd::V4;
+  // P's rows as float splats once (in the loop the compiler converted and splatted them at every step).
+  V4 p0[6], p1[6];
+  for (int j = 0; j < 6; ++j) {
+    p0[j] = simd::splat<V4>(static_cast<float>(P(0, j)));
+    p1[j] = simd::splat<V4>(static_cast<float>(P(1, j)));
+  }
   for (int k = 0; k < n8; k += 4) {
     V4 a = accumulate ? simd::load<V4>(px + k) : V4{}, c = accumulate ? simd::load<V4>(py + k) : V4{};
     for (int j = 0; j < 6; ++j) {
       const V4 v = simd::load<V4>(&sd[j][k]);
-      a += static_cast<float>(P(0, j)) * v;
-      c += static_cast<float>(P(1, j)) * v;
+      a += p0[j] * v;
+      c += p1[j] * v;
     }
     simd::store(px + k, a);
     simd::store(py + k, c);
@@ -440,10 +461,13 @@ LkResult refine_affine(const GrayView& src, const float* tgx, const float* tgy, 
         if (white) {
           g = bspline_noise_autocorrelation(fx, 0) * bspline_noise_autocorrelation(fy, 0);
         } else {
+          double ax[kNoiseLagReach + 1], ay[kNoiseLagReach + 1];
+          bspline_noise_autocorrelations(fx, ax);
+          bspline_noise_autocorrelations(fy, ay);
           double rx[2 * kNoiseLagReach + 1], ry[2 * kNoiseLagReach + 1];
           for (int l = -kNoiseLagReach; l <= kNoiseLagReach; ++l) {
-            rx[l + kNoiseLagReach] = bspline_noise_autocorrelation(fx, l);
-            ry[l + kNoiseLagReach] = bspline_noise_autocorrelation(fy, l);
+            rx[l + kNoiseLagReach] = ax[std::abs(l)];
+            ry[l + kNoiseLagReach] = ay[std::abs(l)];
           }
           g = 0;
           for (int ly = 0; ly <= 2 * kNoiseLagReach; ++ly)

@@ -47,5 +47,8 @@ double bspline_knot_derivative_tap(int k);
 // table at 1/256 (linear between entries: ~1e-6). In 2-D the interpolant is the product of the axes'.
 inline constexpr int kNoiseLagReach = 2;
 double bspline_noise_autocorrelation(double f, int lag);
+// The same for every lag 0 .. kNoiseLagReach at once (the same values: one table look-up set-up for
+// all, for the LK's per-sample use).
+void bspline_noise_autocorrelations(double f, double (&out)[kNoiseLagReach + 1]);
 
 }  // namespace naneye::recon::scene
