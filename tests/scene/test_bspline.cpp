@@ -218,5 +218,18 @@ TEST(BSpline, NoiseAutocorrelationIsWhatInterpolatingWhiteNoiseGives) {
   EXPECT_THROW(bspline_noise_autocorrelation(0.5, kNoiseLagReach + 1), std::invalid_argument);
 }
 
+// The LK's all-lags look-up (lk_affine.cpp) gives each lag's value bit for bit, at the table's
+// entries, between them and at the clamped ends.
+TEST(BSpline, NoiseAutocorrelationsForAllLagsAreTheSingleLookUps) {
+  for (const double f : {-0.1, 0.0, 1.0 / 256, 0.123456, 0.5, 0.77, 255.5 / 256, 1.0, 1.3}) {
+    double all[kNoiseLagReach + 1];
+    bspline_noise_autocorrelations(f, all);
+    for (int lag = 0; lag <= kNoiseLagReach; ++lag) {
+      EXPECT_EQ(all[lag], bspline_noise_autocorrelation(f, lag)) << f << " " << lag;
+      EXPECT_EQ(all[lag], bspline_noise_autocorrelation(f, -lag)) << f << " " << lag;
+    }
+  }
+}
+
 }  // namespace bspline_test
 }  // namespace naneye::recon::scene
