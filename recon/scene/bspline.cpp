@@ -120,8 +120,7 @@ constexpr int kNoiseSteps = 256;
 using NoiseTable = std::array<std::array<double, kNoiseSteps + 1>, kNoiseLagReach + 1>;
 
 const NoiseTable& noise_table() {
-  constexpr int kSteps = kNoiseSteps,
-                kReach = 24;  // |z1|^24 ~ 2e-14: the cardinal spline's taps beyond are 0
+  constexpr int kReach = 24;  // |z1|^24 ~ 2e-14: the cardinal spline's taps beyond are 0
   // Immutable after its first use (a function-local static: built once, thread-safe).
   static const NoiseTable table = [] {
     const auto beta3 = [](double x) {
@@ -136,8 +135,8 @@ const NoiseTable& noise_table() {
       return v;
     };
     NoiseTable t{};
-    for (int i = 0; i <= kSteps; ++i) {
-      const double fi = static_cast<double>(i) / kSteps;
+    for (int i = 0; i <= kNoiseSteps; ++i) {
+      const double fi = static_cast<double>(i) / kNoiseSteps;
       double taps[2 * kReach + 1 + kNoiseLagReach];
       for (int j = -kReach; j <= kReach + kNoiseLagReach; ++j) taps[j + kReach] = eta(fi + j);
       for (int l = 0; l <= kNoiseLagReach; ++l) {

@@ -62,7 +62,7 @@ Eigen::Matrix<double, K, K> kernel_gram(const std::array<float, 9>& b, const flo
       const float* p1 = p0 + in_stride;
       const float* p2 = p1 + in_stride;
       for (int c = 0; c < stride; c += 4) {  // columns >= g read only the zero padding: stay 0
-        // The taps in the order of the plain double loop (rows, then columns): the same bits.
+        // The taps rows first, then columns, from a zero start: a plain loop over (i, j)'s order and bits.
         V4 acc = V4{};
         acc += bk[0] * simd::load<V4>(p0 + c);
         acc += bk[1] * simd::load<V4>(p0 + c + 1);
