@@ -198,17 +198,22 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   window_inverse_norms(luma.right_search_view(), s_.search_radius, usable_search_[1].data(),
                        inv_norm_[1].data(), norm_scratch_.data());
   // Coarse to fine over the cell grid (SparseSettings::max_points): every 4th cell in both
-  // directions, then every 2nd, then the three remaining quarter lattices, raster order within each.
+  // directions, then every 2nd (a lattice of 2 cells' pitch that covers the view), then the rest;
+  // strongest first within each, by lambda_min, i.e. by the shift sigma the feature's window allows
+  // (features.hpp). Where matching stops early the features left untried are the least precise,
+  // not those of the image's bottom rows (raster order, until 2026-12-07: at the measured sensor
+  // the sparse depth error 0.517x -> 0.448x the OpenCV path's on the plane, docs/scene.md).
   const int cell = s_.features.cell_px;
   const auto rank = [cell](const Feature& f) {
     const int cx = f.u / cell, cy = f.v / cell;
     if (cx % 4 == 0 && cy % 4 == 0) return 0;
     if (cx % 2 == 0 && cy % 2 == 0) return 1;
-    return 2 + (cx % 2) + 2 * (cy % 2) - 1;  // (1, 0) -> 2, (0, 1) -> 3, (1, 1) -> 4
+    return 2;
   };
   std::sort(features_.begin(), features_.end(), [&](const Feature& a, const Feature& b) {
     const int ra = rank(a), rb = rank(b);
     if (ra != rb) return ra < rb;
+    if (a.min_eig != b.min_eig) return a.min_eig > b.min_eig;
     return a.v != b.v ? a.v < b.v : a.u < b.u;
   });
   std::size_t tried = 0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <set>
@@ -146,6 +147,43 @@ TEST(FeatureIds, SparsePathKeepsEveryIdOnTheSamePairAndSpreadsItsPoints) {
   for (const auto& q : b.points)
     if (q.valid()) ++quarter[(q.left_px.x() >= 125 ? 1 : 0) + (q.left_px.y() >= 125 ? 2 : 0)];
   for (int k = 0; k < 4; ++k) EXPECT_GE(quarter[k], b.valid_count / 6) << "quarter " << k;
+}
+
+// Where matching stops at max_points, the features it tried are the coarse lattice (every 2nd cell
+// in both directions: the view covered) and then the strongest of the rest by lambda_min, i.e. the
+// most precise (SparseReconstructor::reconstruct): not the rest's top rows, as in raster order.
+TEST(FeatureIds, SparsePathTriesTheLatticeThenTheStrongestWhereItStops) {
+  const auto& p = test::textured_pair("plane", false);
+  recon::scene::SparseReconstructor sr(test::paper_d3());
+  recon::scene::SparseResult out;
+  sr.reconstruct(sim::raw_view(p.left, false), sim::raw_view(p.right, false), out);
+  std::vector<Feature> all;
+  all.reserve(static_cast<std::size_t>(sr.settings().max_features));
+  FeatureDetector det(250, 250, sr.settings().features);
+  det.detect(sr.luma().left_view(), sr.usable(0).data(), out.noise_sigma_dn, all);
+  ASSERT_EQ(out.valid_count, sr.settings().max_points);
+  ASSERT_LT(out.points.size(), all.size() * 3 / 4);  // stopped well before the last feature
+  std::set<std::pair<int, int>> tried;
+  for (const auto& q : out.points)
+    tried.insert(
+        {static_cast<int>(std::lround(q.left_px.x())), static_cast<int>(std::lround(q.left_px.y()))});
+  const int cell = sr.settings().features.cell_px;
+  float weakest_tried = std::numeric_limits<float>::infinity(), strongest_left = 0;
+  int rest_tried = 0;
+  for (const Feature& f : all) {
+    const bool lattice = (f.u / cell) % 2 == 0 && (f.v / cell) % 2 == 0;
+    const bool was_tried = tried.count({f.u, f.v}) > 0;
+    if (lattice) {
+      EXPECT_TRUE(was_tried) << f.u << ", " << f.v;
+    } else if (was_tried) {
+      weakest_tried = std::min(weakest_tried, f.min_eig);
+      ++rest_tried;
+    } else {
+      strongest_left = std::max(strongest_left, f.min_eig);
+    }
+  }
+  EXPECT_GT(rest_tried, 50);
+  EXPECT_GE(weakest_tried, strongest_left);
 }
 
 }  // namespace

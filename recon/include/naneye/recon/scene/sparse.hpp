@@ -108,8 +108,9 @@ struct SparseSettings {
   int max_features = 1536;
   // The valid points a pair needs: the issue's >= 300 good points per pair, with room for a scene
   // the right eye half misses. Features are tried coarse to fine over the image (one per 4 x 4
-  // cells first, then per 2 x 2, then the rest) and matching stops once this many are valid, so the
-  // points stay spread over the whole view and the time per pair stays bounded (docs/scene.md).
+  // cells first, then per 2 x 2, then the rest; strongest first within each) and matching stops
+  // once this many are valid, so the points stay spread over the whole view, the ones left out are
+  // the least precise, and the time per pair stays bounded (docs/scene.md).
   int max_points = 512;
   FeatureIdSettings ids;
 };
