@@ -10,8 +10,6 @@
 // thread), so they mean "one core" even on a loaded machine. Accuracy is over the pairs each path
 // found: corner RMS in raw pixels (both eyes), triangulated 3D RMS and, ours only, the RMS of the
 // corners on the fitted board pose, all against the truth.
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -27,16 +25,13 @@
 #include "naneye/sim/presets.hpp"
 #include "naneye/sim/render.hpp"
 #include "naneye/sim/sim_source.hpp"
+#include "thread_clock.hpp"
 
 using namespace naneye;
 
 namespace {
 
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using bench::thread_cpu_s;
 
 struct Frames {
   std::vector<sim::RenderedPair> pairs;

@@ -10,7 +10,6 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <sys/epoll.h>
-#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -22,6 +21,8 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "thread_clock.hpp"
 
 namespace naneye::bench {
 
@@ -43,13 +44,6 @@ struct LoadResult {
 };
 
 namespace detail {
-
-inline double thread_cpu_seconds() {
-  rusage u{};
-  getrusage(RUSAGE_THREAD, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
-}
 
 struct Connection {
   int fd = -1;
@@ -113,7 +107,7 @@ inline LoadResult http_load(int port, const std::string& path, int connections, 
     return send_request(c);
   };
 
-  const double cpu0 = detail::thread_cpu_seconds();
+  const double cpu0 = thread_cpu_s();
   const auto t0 = clock::now();
   const auto until = t0 + std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(seconds));
   for (std::size_t i = 0; i < conns.size(); ++i) open(i);
@@ -162,7 +156,7 @@ inline LoadResult http_load(int port, const std::string& path, int connections, 
     }
   }
   r.seconds = std::chrono::duration<double>(clock::now() - t0).count();
-  r.cpu_seconds = detail::thread_cpu_seconds() - cpu0;
+  r.cpu_seconds = thread_cpu_s() - cpu0;
   for (auto& c : conns)
     if (c.fd >= 0) close(c.fd);
   close(ep);
