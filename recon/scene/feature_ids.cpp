@@ -10,8 +10,12 @@
 
 namespace naneye::recon::scene {
 
-FeatureIds::FeatureIds(int width, int height, int max_features, const FeatureIdSettings& s)
+FeatureIds::FeatureIds(int width, int height, int max_features, const FeatureIdSettings& s,
+                       int detector_cell_px)
     : s_(s), w_(width), h_(height), cell_(std::max(1, s.max_motion_px)) {
+  const int dc = std::max(1, detector_cell_px);
+  detected_in_cell_.assign(static_cast<std::size_t>((w_ + dc - 1) / dc) * ((h_ + dc - 1) / dc), -1);
+  cell_kept_.assign(detected_in_cell_.size(), 0);
   const auto n = static_cast<std::size_t>(std::max(0, max_features));
   prev_luma_.assign(static_cast<std::size_t>(w_) * h_, 0.f);
   prev_.reserve(n);
@@ -27,6 +31,8 @@ FeatureIds::FeatureIds(int width, int height, int max_features, const FeatureIdS
   votes_x_.reserve(n);
   pair_dx_.assign(n, 0.f);
   pair_dy_.assign(n, 0.f);
+  track_x_.assign(n, 0.f);
+  track_y_.assign(n, 0.f);
   votes_y_.reserve(n);
   resampled_.assign(static_cast<std::size_t>((2 * s.radius + 1) * (2 * s.radius + 1)), 0.f);
   prev_taken_.assign(n, 0);
@@ -169,13 +175,8 @@ void FeatureIds::estimate_motion(std::span<const Feature> tried) {
     }
 }
 
-void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all,
-                        std::span<std::int64_t> ids) {
-  const std::span<const Feature> tried = tried_all.first(std::min(tried_all.size(), ids.size()));
-  const int n = static_cast<int>(tried.size());
+void FeatureIds::bucket_previous() {
   const int cols = (w_ + cell_ - 1) / cell_;
-  const GrayView prev{prev_luma_.data(), w_, h_};
-  // Bucket the previous features.
   std::fill(head_.begin(), head_.end(), -1);
   for (int p = 0; p < static_cast<int>(prev_.size()); ++p) {
     const std::size_t b = static_cast<std::size_t>(prev_[p].v / cell_) * cols + prev_[p].u / cell_;
@@ -183,6 +184,62 @@ void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all
     head_[b] = p;
     prev_taken_[static_cast<std::size_t>(p)] = 0;
   }
+}
+
+void FeatureIds::keep_tracked(const GrayView& left, const FeatureDetector& det, const std::uint8_t* usable,
+                              double noise_sigma, std::vector<Feature>& features) {
+  if (!s_.keep_tracked || prev_.empty()) return;
+  const std::span<const Feature> detected(features.data(), std::min(features.size(), cur_windows_.size()));
+  bucket_previous();
+  for (std::size_t k = 0; k < detected.size(); ++k)
+    cur_windows_[k] = window(left, detected[k].u, detected[k].v);
+  pair_whole_pixels(left, detected);
+  estimate_motion(detected);
+  const int cell = det.settings().cell_px, cols = (w_ + cell - 1) / cell, rows = (h_ + cell - 1) / cell;
+  // Sized at construction for the detector's cells (another cell size: sized here, once).
+  detected_in_cell_.assign(static_cast<std::size_t>(cols) * rows, -1);
+  cell_kept_.assign(detected_in_cell_.size(), 0);
+  for (std::size_t k = 0; k < detected.size(); ++k)
+    detected_in_cell_[static_cast<std::size_t>(detected[k].v / cell) * cols + detected[k].u / cell] =
+        static_cast<int>(k);
+  const double need = det.min_eig_needed(noise_sigma);
+  const int mc = (w_ + s_.motion_cell_px - 1) / s_.motion_cell_px;
+  // In the previous pair's order (its own coarse-to-fine, strongest-first order): where two
+  // predictions fall in one cell, the one tried first there keeps it.
+  for (const Prev& q : prev_) {
+    const Motion& m =
+        motion_[static_cast<std::size_t>(q.v / s_.motion_cell_px) * mc + q.u / s_.motion_cell_px];
+    if (!m.known) continue;
+    const double x = q.x + m.dx, y = q.y + m.dy;
+    const int u = static_cast<int>(std::lround(x)), v = static_cast<int>(std::lround(y));
+    if (u < 0 || v < 0 || u >= w_ || v >= h_ || !usable[static_cast<std::size_t>(v) * w_ + u]) continue;
+    const std::size_t c = static_cast<std::size_t>(v / cell) * cols + u / cell;
+    const int k = detected_in_cell_[c];
+    if (k < 0 || cell_kept_[c]) continue;  // no detection there passed the gate, or one is kept
+    Feature& f = features[static_cast<std::size_t>(k)];
+    if (std::hypot(f.u - x, f.v - y) <= s_.match_px) {  // already where the point went
+      cell_kept_[c] = 1;
+      continue;
+    }
+    const float lmin = det.min_eig_at(u, v);
+    if (lmin < need || !(lmin > 0)) continue;
+    // The same patch as the previous feature's (assign's pass-2 test, here before matching): where
+    // the motion is a chance median (another scene, a cut), nothing replaces the cell's strongest.
+    const GrayView prev{prev_luma_.data(), w_, h_};
+    if (zncc_resampled(left, u, v, window(left, u, v), prev, u - m.dx, v - m.dy) < s_.verify_zncc) continue;
+    f = Feature{u, v, lmin};
+    cell_kept_[c] = 1;
+  }
+}
+
+void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all,
+                        std::span<std::int64_t> ids) {
+  const std::span<const Feature> tried = tried_all.first(std::min(tried_all.size(), ids.size()));
+  const int n = static_cast<int>(tried.size());
+  const int cols = (w_ + cell_ - 1) / cell_;
+  const int mc = (w_ + s_.motion_cell_px - 1) / s_.motion_cell_px;
+  const GrayView prev{prev_luma_.data(), w_, h_};
+  bucket_previous();
   for (int k = 0; k < n; ++k) {
     const Feature& f = tried[static_cast<std::size_t>(k)];
     cur_windows_[static_cast<std::size_t>(k)] = window(left, f.u, f.v);
@@ -194,7 +251,6 @@ void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all
     estimate_motion(tried);
     // Pass 2: the previous feature at the predicted place, verified on the resampled window.
     candidates_.clear();
-    const int mc = (w_ + s_.motion_cell_px - 1) / s_.motion_cell_px;
     for (int k = 0; k < n; ++k) {
       const Feature& f = tried[static_cast<std::size_t>(k)];
       const Motion& m =
@@ -209,7 +265,7 @@ void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all
           for (int p = head_[static_cast<std::size_t>(rr) * cols + cc]; p >= 0;
                p = link_[static_cast<std::size_t>(p)]) {
             const Prev& q = prev_[static_cast<std::size_t>(p)];
-            const double d = std::hypot(q.u - x, q.v - y);
+            const double d = std::hypot(q.x - x, q.y - y);
             if (d <= best_d) {
               best_d = d;
               best_p = p;
@@ -228,14 +284,25 @@ void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all
     auto& taken = prev_taken_[static_cast<std::size_t>(c.prev)];
     if (taken) continue;
     taken = 1;
-    ids[static_cast<std::size_t>(c.feature)] = prev_[static_cast<std::size_t>(c.prev)].id;
+    const Prev& q = prev_[static_cast<std::size_t>(c.prev)];
+    const Feature& f = tried[static_cast<std::size_t>(c.feature)];
+    const Motion& m =
+        motion_[static_cast<std::size_t>(f.v / s_.motion_cell_px) * mc + f.u / s_.motion_cell_px];
+    ids[static_cast<std::size_t>(c.feature)] = q.id;
+    track_x_[static_cast<std::size_t>(c.feature)] = q.x + m.dx;
+    track_y_[static_cast<std::size_t>(c.feature)] = q.y + m.dy;
     feature_done_[static_cast<std::size_t>(c.feature)] = 1;
   }
   next_.clear();
   for (int k = 0; k < n; ++k) {
-    if (!feature_done_[static_cast<std::size_t>(k)]) ids[static_cast<std::size_t>(k)] = next_id_++;
     const Feature& f = tried[static_cast<std::size_t>(k)];
-    next_.push_back({f.u, f.v, ids[static_cast<std::size_t>(k)], cur_windows_[static_cast<std::size_t>(k)]});
+    if (!feature_done_[static_cast<std::size_t>(k)]) {
+      ids[static_cast<std::size_t>(k)] = next_id_++;
+      track_x_[static_cast<std::size_t>(k)] = static_cast<float>(f.u);
+      track_y_[static_cast<std::size_t>(k)] = static_cast<float>(f.v);
+    }
+    next_.push_back({f.u, f.v, ids[static_cast<std::size_t>(k)], cur_windows_[static_cast<std::size_t>(k)],
+                     track_x_[static_cast<std::size_t>(k)], track_y_[static_cast<std::size_t>(k)]});
   }
   prev_.swap(next_);
   std::copy(left.data, left.data + static_cast<std::size_t>(w_) * h_, prev_luma_.begin());

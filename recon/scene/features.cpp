@@ -50,6 +50,28 @@ FeatureDetector::FeatureDetector(int width, int height, const FeatureSettings& s
   iyy_.assign(ni, 0.0);
 }
 
+double FeatureDetector::min_eig_needed(double noise_sigma) const {
+  // lambda_min needed for the shift sigma bound: sigma_t^2 = 2 sigma_n^2 / lambda_min (two noisy images).
+  return 2.0 * noise_sigma * noise_sigma / (s_.max_shift_sigma_px * s_.max_shift_sigma_px);
+}
+
+double FeatureDetector::window_min_eig(int u, int v) const {
+  const int W = w_ + 1, rad = s_.window_radius;
+  const int c0 = u - rad, r0 = v - rad, c1 = u + rad + 1, r1 = v + rad + 1;
+  const auto box = [&](const std::vector<double>& I) {
+    return I[static_cast<std::size_t>(r1) * W + c1] - I[static_cast<std::size_t>(r0) * W + c1] -
+           I[static_cast<std::size_t>(r1) * W + c0] + I[static_cast<std::size_t>(r0) * W + c0];
+  };
+  const double a = box(ixx_), b = box(ixy_), d = box(iyy_);
+  return 0.5 * (a + d) - std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+}
+
+float FeatureDetector::min_eig_at(int u, int v) const {
+  const int rad = s_.window_radius;
+  if (u - rad < 0 || v - rad < 0 || u + rad + 1 > w_ || v + rad + 1 > h_) return -1.f;
+  return static_cast<float>(window_min_eig(u, v));
+}
+
 void FeatureDetector::detect(const GrayView& img, const std::uint8_t* usable, double noise_sigma,
                              std::vector<Feature>& out) {
   out.clear();
@@ -76,12 +98,7 @@ void FeatureDetector::detect(const GrayView& img, const std::uint8_t* usable, do
       iyy_[q] = iyy_[qa] + syy;
     }
   }
-  auto box = [&](const std::vector<double>& I, int c0, int r0, int c1, int r1) {
-    return I[static_cast<std::size_t>(r1) * W + c1] - I[static_cast<std::size_t>(r0) * W + c1] -
-           I[static_cast<std::size_t>(r1) * W + c0] + I[static_cast<std::size_t>(r0) * W + c0];
-  };
-  // lambda_min needed for the shift sigma bound: sigma_t^2 = 2 sigma_n^2 / lambda_min (two noisy images).
-  const double need = 2.0 * noise_sigma * noise_sigma / (s_.max_shift_sigma_px * s_.max_shift_sigma_px);
+  const double need = min_eig_needed(noise_sigma);
   const int rad = s_.window_radius, cell = s_.cell_px;
   for (int cr = 0; cr < h; cr += cell)
     for (int cc = 0; cc < w; cc += cell) {
@@ -90,11 +107,8 @@ void FeatureDetector::detect(const GrayView& img, const std::uint8_t* usable, do
       for (int r = cr; r < std::min(h, cr + cell); ++r)
         for (int c = cc; c < std::min(w, cc + cell); ++c) {
           if (!usable[r * w + c]) continue;
-          const int c0 = c - rad, r0 = r - rad, c1 = c + rad + 1, r1 = r + rad + 1;
-          if (c0 < 0 || r0 < 0 || c1 > w || r1 > h) continue;
-          const double a = box(ixx_, c0, r0, c1, r1), b = box(ixy_, c0, r0, c1, r1),
-                       d = box(iyy_, c0, r0, c1, r1);
-          const double lmin = 0.5 * (a + d) - std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+          if (c - rad < 0 || r - rad < 0 || c + rad + 1 > w || r + rad + 1 > h) continue;
+          const double lmin = window_min_eig(c, r);
           if (lmin > best.min_eig) best = Feature{c, r, static_cast<float>(lmin)};
         }
       if (best.min_eig >= need && best.min_eig > 0 && out.size() < out.capacity()) out.push_back(best);

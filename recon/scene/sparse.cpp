@@ -95,7 +95,7 @@ SparseReconstructor::SparseReconstructor(const StereoRig& rig, const SparseSetti
       calib_(CalibrationUncertainty::of(rig)),
       s_(s),
       detector_(rig.left.width(), rig.left.height(), s.features),
-      ids_(rig.left.width(), rig.left.height(), s.max_features, s.ids) {
+      ids_(rig.left.width(), rig.left.height(), s.max_features, s.ids, s.features.cell_px) {
   if (s.lk.radius > kMaxLkRadius || s.wide_radius > kMaxLkRadius)
     throw std::invalid_argument("sparse: lk.radius " + std::to_string(s.lk.radius) + " and wide_radius " +
                                 std::to_string(s.wide_radius) + " must be at most " +
@@ -193,6 +193,7 @@ void SparseReconstructor::reconstruct(const StereoLuma& luma, SparseResult& out)
   out.noise_sigma_dn = estimate_noise_sigma(L, noise_mask_.data(),
                                             luma.bayer ? LkSettings::binomial3() : LkSettings{}.noise_kernel);
   detector_.detect(L, usable_[0].data(), out.noise_sigma_dn, features_);
+  ids_.keep_tracked(L, detector_, usable_[0].data(), out.noise_sigma_dn, features_);
   window_inverse_norms(luma.left_search_view(), s_.search_radius, usable_search_[0].data(),
                        inv_norm_[0].data(), norm_scratch_.data());
   window_inverse_norms(luma.right_search_view(), s_.search_radius, usable_search_[1].data(),

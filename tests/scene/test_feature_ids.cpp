@@ -2,6 +2,8 @@
 // a few pixels, a new view never inherits ids, and the sparse path carries them.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -58,12 +60,16 @@ struct Kept {
   int correspondences = 0, same_id = 0, wrong = 0, inherited = 0;
 };
 
-// b is a moved by (dx, dy): a feature of b whose point was a feature of a (within 1 px of where the
-// move puts it) should carry its id; an inherited id whose a-feature is farther than 1.5 px from
-// there is wrong.
-Kept compare(const Frame& a, const Frame& b, double dx, double dy) {
-  std::map<std::int64_t, const Feature*> by_id;
-  for (std::size_t k = 0; k < a.features.size(); ++k) by_id[a.ids[k]] = &a.features[k];
+// Where each id began, in the base image's coordinates (a pixel of a frame moved by (dx, dy) shows
+// the base image's point (u - dx, v - dy)): an id is one scene point while it lives.
+using Origins = std::map<std::int64_t, std::pair<double, double>>;
+
+// b is a moved by (dx, dy), the base by (bx, by) in all: a feature of b whose point was a feature of
+// a (within 1 px of where the move puts it) should carry its id; an inherited id is wrong when b's
+// pixel lies farther than 1.5 px from the point the id began at (the pixel centre nearest the id's
+// point is within 0.71 px of it; the motion's estimate adds the rest). New ids' origins are noted.
+Kept compare(const Frame& a, const Frame& b, double dx, double dy, double bx, double by, Origins& origin) {
+  std::set<std::int64_t> in_a(a.ids.begin(), a.ids.end());
   Kept out;
   for (std::size_t k = 0; k < b.features.size(); ++k) {
     const Feature& f = b.features[k];
@@ -71,10 +77,13 @@ Kept compare(const Frame& a, const Frame& b, double dx, double dy) {
     const bool had = std::any_of(a.features.begin(), a.features.end(),
                                  [&](const Feature& g) { return std::hypot(g.u - ux, g.v - vy) <= 1.0; });
     out.correspondences += had;
-    const auto it = by_id.find(b.ids[k]);
-    if (it == by_id.end()) continue;
+    if (!in_a.count(b.ids[k])) {
+      origin[b.ids[k]] = {f.u - bx, f.v - by};
+      continue;
+    }
     ++out.inherited;
-    const bool right = std::hypot(it->second->u - ux, it->second->v - vy) <= 1.5;
+    const auto& [ox, oy] = origin.at(b.ids[k]);
+    const bool right = std::hypot(f.u - bx - ox, f.v - by - oy) <= 1.5;
     out.same_id += right && had;
     out.wrong += !right;
   }
@@ -91,6 +100,9 @@ TEST(FeatureIds, FollowPointsThatMoveAndNeverReuseAnId) {
   ids.assign(GrayView{reinterpret_cast<const float*>(prev.img.data), 250, 250}, prev.features, prev.ids);
   std::set<std::int64_t> first(prev.ids.begin(), prev.ids.end());
   EXPECT_EQ(first.size(), prev.ids.size());  // all distinct
+  Origins origin;
+  for (std::size_t k = 0; k < prev.features.size(); ++k)
+    origin[prev.ids[k]] = {prev.features[k].u, prev.features[k].v};
   // A smooth hand-held move: 1-3 px per frame, sub-pixel, changing direction.
   const double steps[][2] = {{1.0, 0.0}, {1.5, 0.5}, {0.3, 2.2}, {-2.0, 1.0}, {-1.2, -2.6}};
   for (const auto& st : steps) {
@@ -99,7 +111,7 @@ TEST(FeatureIds, FollowPointsThatMoveAndNeverReuseAnId) {
     Frame cur{shifted(base, dx, dy), {}, {}};
     detect(det, cur);
     ids.assign(GrayView{reinterpret_cast<const float*>(cur.img.data), 250, 250}, cur.features, cur.ids);
-    const Kept k = compare(prev, cur, st[0], st[1]);
+    const Kept k = compare(prev, cur, st[0], st[1], dx, dy, origin);
     std::printf("move (%+.1f, %+.1f): %4zu features, %4d had a match, %4d kept their id, %d wrong\n", st[0],
                 st[1], cur.features.size(), k.correspondences, k.same_id, k.wrong);
     // Measured: 82-95 % kept, 0 wrong (the rest fail the sub-pixel verification or lose a tie).
@@ -184,6 +196,96 @@ TEST(FeatureIds, SparsePathTriesTheLatticeThenTheStrongestWhereItStops) {
   }
   EXPECT_GT(rest_tried, 50);
   EXPECT_GE(weakest_tried, strongest_left);
+}
+
+// A hand-held sequence at camera rate (62 fps, sim::handheld_camera_pose): how long ids live and
+// whether one id stays one scene point. Per frame the valid points whose id was a valid point the
+// frame before ("carried"); per id living >= 10 frames, how far apart the surface points it gave at
+// its first and last frame are (the scene's frame, in pixels at their depth: Z / 216 mm a pixel).
+struct SequenceFigures {
+  double carried = 0, mean_life = 0, drift_px = 0;
+  int long_tracks = 0;
+};
+
+struct SequenceFrame {
+  sim::Pose camera;
+  cv::Mat left, right;
+};
+
+// The frames of a preset seen along the trajectory, rendered once per test binary (no truth needed:
+// the drift is measured in the scene's frame from the points themselves).
+const std::vector<SequenceFrame>& sequence(const std::string& preset, int frames) {
+  static std::map<std::pair<std::string, int>, std::vector<SequenceFrame>> cache;
+  auto& seq = cache[{preset, frames}];
+  if (!seq.empty()) return seq;
+  const auto scene = *sim::textured_preset(preset);
+  for (int k = 0; k < frames; ++k) {
+    SequenceFrame f{sim::handheld_camera_pose(scene.light_reference_mm, k / 62.0), {}, {}};
+    sim::Rng rng(1000 + static_cast<std::uint64_t>(k));
+    test::textured_renderer(false).render_frames(sim::seen_from(scene, f.camera), rng, f.left, f.right);
+    seq.push_back(std::move(f));
+  }
+  return seq;
+}
+
+SequenceFigures follow(const std::string& preset, bool keep_tracked, int frames) {
+  recon::scene::SparseSettings s;
+  s.ids.keep_tracked = keep_tracked;
+  recon::scene::SparseReconstructor sr(test::paper_d3(), s);
+  recon::scene::SparseResult out;
+  std::set<std::int64_t> prev, cur;
+  std::map<std::int64_t, int> life;
+  std::map<std::int64_t, std::pair<Eigen::Vector3d, Eigen::Vector3d>> ends;  // first, last (scene frame)
+  long carried = 0, total = 0;
+  int k = 0;
+  for (const SequenceFrame& frame : sequence(preset, frames)) {
+    const sim::Pose& pose = frame.camera;
+    sr.reconstruct(sim::raw_view(frame.left, false), sim::raw_view(frame.right, false), out);
+    cur.clear();
+    for (const auto& q : out.points) {
+      if (!q.valid()) continue;
+      cur.insert(q.id);
+      ++life[q.id];
+      const Eigen::Vector3d x = pose.R * q.X + pose.t;
+      const auto [it, fresh] = ends.try_emplace(q.id, x, x);
+      it->second.second = x;
+      if (k > 0) {
+        ++total;
+        carried += prev.count(q.id);
+      }
+    }
+    prev.swap(cur);
+    ++k;
+  }
+  SequenceFigures f;
+  f.carried = static_cast<double>(carried) / static_cast<double>(std::max(1L, total));
+  for (const auto& [id, n] : life) {
+    f.mean_life += n;
+    if (n < 10) continue;
+    const auto& [a, b] = ends.at(id);
+    f.drift_px += (b - a).norm() / (0.5 * (a.z() + b.z()) / 216.0);
+    ++f.long_tracks;
+  }
+  f.mean_life /= static_cast<double>(std::max<std::size_t>(1, life.size()));
+  f.drift_px /= std::max(1, f.long_tracks);
+  std::printf(
+      "%-6s keep_tracked %d: carried %.3f, mean life %.1f frames, %d ids >= 10 frames drift %.2f px\n",
+      preset.c_str(), keep_tracked, f.carried, f.mean_life, f.long_tracks, f.drift_px);
+  return f;
+}
+
+// FeatureIds::keep_tracked: each cell's strongest pixel moves from spot to spot of the texture as
+// the image moves, and every move ended an id. Measured over 30 frames (2026-12-07): plane carried
+// 0.82 -> 0.95, mean life 4.9 -> 12.9 frames; drift 0.87 -> 0.89 px (the floor: the pixel centre
+// reported is within 0.71 px of the id's point, and the depth's own error). Before the ids carried
+// their sub-pixel point, the chained roundings walked: 2.9 px over the same tracks. 14 frames here.
+TEST(FeatureIds, AHandHeldSequenceKeepsItsIdsOnTheirPoints) {
+  const SequenceFigures kept = follow("plane", true, 14), fresh = follow("plane", false, 14);
+  EXPECT_GE(kept.carried, 0.9);
+  EXPECT_LT(fresh.carried, kept.carried - 0.05);
+  EXPECT_GT(kept.mean_life, 1.5 * fresh.mean_life);
+  ASSERT_GE(kept.long_tracks, 200);
+  EXPECT_LE(kept.drift_px, 1.5);
 }
 
 }  // namespace

@@ -50,11 +50,18 @@ class FeatureDetector {
   // cell, cells in raster order).
   void detect(const GrayView& img, const std::uint8_t* usable, double noise_sigma, std::vector<Feature>& out);
   const FeatureSettings& settings() const { return s_; }
+  // The smallest lambda_min (DN^2) a feature needs at this noise: the gate of max_shift_sigma_px.
+  double min_eig_needed(double noise_sigma) const;
+  // lambda_min of the structure tensor over the window at a pixel of the last image; -1 where the
+  // window leaves the image.
+  float min_eig_at(int u, int v) const;
   // The last image's central-difference gradients (the sub-pixel matcher's template gradients).
   const float* gx() const { return gx_.data(); }
   const float* gy() const { return gy_.data(); }
 
  private:
+  double window_min_eig(int u, int v) const;  // the window inside the image
+
   FeatureSettings s_;
   int w_, h_;
   std::vector<float> gx_, gy_;
