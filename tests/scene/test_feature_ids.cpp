@@ -288,5 +288,28 @@ TEST(FeatureIds, AHandHeldSequenceKeepsItsIdsOnTheirPoints) {
   EXPECT_LE(kept.drift_px, 1.5);
 }
 
+// A cut: after frames of one scene, a pair of another. Nothing follows over (the motion there is a
+// chance median at best, and keep_tracked's patch test refuses it): the features are those a fresh
+// reconstructor detects, and every id is new.
+TEST(FeatureIds, ACutToAnotherSceneKeepsNothing) {
+  recon::scene::SparseReconstructor followed(test::paper_d3()), fresh(test::paper_d3());
+  recon::scene::SparseResult a, b;
+  for (const SequenceFrame& f : sequence("plane", 3))
+    followed.reconstruct(sim::raw_view(f.left, false), sim::raw_view(f.right, false), a);
+  ASSERT_GT(a.valid_count, 400);
+  const std::int64_t last =
+      std::max_element(a.points.begin(), a.points.end(), [](const auto& x, const auto& y) {
+        return x.id < y.id;
+      })->id;
+  const auto& p = test::textured_pair("sphere", false);
+  followed.reconstruct(sim::raw_view(p.left, false), sim::raw_view(p.right, false), a);
+  fresh.reconstruct(sim::raw_view(p.left, false), sim::raw_view(p.right, false), b);
+  ASSERT_EQ(a.points.size(), b.points.size());
+  for (std::size_t k = 0; k < a.points.size(); ++k) {
+    EXPECT_EQ(a.points[k].left_px, b.points[k].left_px) << k;
+    EXPECT_GT(a.points[k].id, last) << k;
+  }
+}
+
 }  // namespace
 }  // namespace naneye
