@@ -74,11 +74,18 @@ float FeatureIds::zncc_resampled(const GrayView& a, int ua, int va, const Window
   const int r = s_.radius;
   if (wa.inv_norm == 0 || xb - r < 1 || yb - r < 1 || xb + r >= b.width - 3 || yb + r >= b.height - 3)
     return -1;
+  // Every sample of the window has the same fractional place: the weights once (sample_cubic's
+  // per pixel were 12 M of the sparse path's ~195 M instructions per pair), the taps inside the
+  // image by the test above.
+  const int c0 = static_cast<int>(xb), r0 = static_cast<int>(yb);
+  float wx[4], wy[4];
+  keys_weights(static_cast<float>(xb - c0), wx);
+  keys_weights(static_cast<float>(yb - r0), wy);
   double sum = 0, sum2 = 0;
   std::size_t k = 0;
   for (int dr = -r; dr <= r; ++dr)
     for (int dc = -r; dc <= r; ++dc, ++k) {
-      const float x = sample_cubic_clamped(b, xb + dc, yb + dr);
+      const float x = cubic_from_taps(b.data + (r0 + dr - 1) * b.width + (c0 + dc - 1), b.width, wx, wy);
       resampled_[k] = x;
       sum += x;
       sum2 += double(x) * x;

@@ -5,8 +5,6 @@
 // against 0.0x px with this kernel; docs/scene.md). Keys' cubic still locks, by up to 0.018 px in the
 // affine LK (tests/scene/test_lk_affine.cpp): the sparse LK and the dense sub-pixel step sample the
 // cubic B-spline instead (bspline.hpp, ~10x less); the dense rectification and the feature ids Keys.
-#include <algorithm>
-#include <cmath>
 
 #include "naneye/recon/scene/features.hpp"
 
@@ -47,22 +45,6 @@ inline float sample_cubic(const GrayView& g, double x, double y) {
   keys_weights(static_cast<float>(x - c), wx);
   keys_weights(static_cast<float>(y - r), wy);
   return cubic_from_taps(g.data + (r - 1) * g.width + (c - 1), g.width, wx, wy);
-}
-
-// The same anywhere in the image: taps beyond the border repeat the edge pixel.
-inline float sample_cubic_clamped(const GrayView& g, double x, double y) {
-  const int c = static_cast<int>(std::floor(x)), r = static_cast<int>(std::floor(y));
-  float wx[4], wy[4];
-  keys_weights(static_cast<float>(x - c), wx);
-  keys_weights(static_cast<float>(y - r), wy);
-  float acc = 0;
-  for (int i = 0; i < 4; ++i) {
-    const int rr = std::clamp(r - 1 + i, 0, g.height - 1);
-    float row = 0;
-    for (int j = 0; j < 4; ++j) row += wx[j] * g.at(std::clamp(c - 1 + j, 0, g.width - 1), rr);
-    acc += wy[i] * row;
-  }
-  return acc;
 }
 
 // The cubic B-spline at (x, y) over coefficients `c` (bspline_coefficients); the caller keeps (x, y)
