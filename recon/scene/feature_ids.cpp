@@ -202,6 +202,7 @@ void FeatureIds::keep_tracked(const GrayView& left, const FeatureDetector& det, 
     cur_windows_[k] = window(left, detected[k].u, detected[k].v);
   pair_whole_pixels(left, detected);
   estimate_motion(detected);
+  motion_ready_ = true;
   const int cell = det.settings().cell_px, cols = (w_ + cell - 1) / cell, rows = (h_ + cell - 1) / cell;
   // Sized at construction for the detector's cells (another cell size: sized here, once).
   detected_in_cell_.assign(static_cast<std::size_t>(cols) * rows, -1);
@@ -210,6 +211,7 @@ void FeatureIds::keep_tracked(const GrayView& left, const FeatureDetector& det, 
     detected_in_cell_[static_cast<std::size_t>(detected[k].v / cell) * cols + detected[k].u / cell] =
         static_cast<int>(k);
   const double need = det.min_eig_needed(noise_sigma);
+  const GrayView prev{prev_luma_.data(), w_, h_};
   const int mc = (w_ + s_.motion_cell_px - 1) / s_.motion_cell_px;
   // In the previous pair's order (its own coarse-to-fine, strongest-first order): where two
   // predictions fall in one cell, the one tried first there keeps it.
@@ -232,7 +234,6 @@ void FeatureIds::keep_tracked(const GrayView& left, const FeatureDetector& det, 
     if (lmin < need || !(lmin > 0)) continue;
     // The same patch as the previous feature's (assign's pass-2 test, here before matching): where
     // the motion is a chance median (another scene, a cut), nothing replaces the cell's strongest.
-    const GrayView prev{prev_luma_.data(), w_, h_};
     if (zncc_resampled(left, u, v, window(left, u, v), prev, u - m.dx, v - m.dy) < s_.verify_zncc) continue;
     f = Feature{u, v, lmin};
     cell_kept_[c] = 1;
@@ -254,8 +255,12 @@ void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all
   }
   candidates_.clear();
   if (!prev_.empty()) {
-    pair_whole_pixels(left, tried);
-    estimate_motion(tried);
+    // One motion per pair: keep_tracked's, over every detection, where it ran (the tried features
+    // are a subset of them, some moved onto the previous points' places).
+    if (!motion_ready_) {
+      pair_whole_pixels(left, tried);
+      estimate_motion(tried);
+    }
     // Pass 2: the previous feature at the predicted place, verified on the resampled window.
     candidates_.clear();
     for (int k = 0; k < n; ++k) {
@@ -311,6 +316,7 @@ void FeatureIds::assign(const GrayView& left, std::span<const Feature> tried_all
     next_.push_back({f.u, f.v, ids[static_cast<std::size_t>(k)], cur_windows_[static_cast<std::size_t>(k)],
                      track_x_[static_cast<std::size_t>(k)], track_y_[static_cast<std::size_t>(k)]});
   }
+  motion_ready_ = false;
   prev_.swap(next_);
   std::copy(left.data, left.data + static_cast<std::size_t>(w_) * h_, prev_luma_.begin());
 }

@@ -56,16 +56,20 @@ class FeatureIds {
   // image) and remembers this pair for the next call. Allocation-free.
   void assign(const GrayView& left, std::span<const Feature> tried, std::span<std::int64_t> ids);
   // Before matching, on this pair's detections (one per cell, FeatureDetector::detect, which must
-  // have run on `left`): where a feature of the previous pair is predicted (the motion of assign's
-  // pass 1, over these detections) at a pixel whose window passes the detector's gate and is
-  // usable, that pixel replaces its cell's detection, unless the detection already sits within
-  // match_px of the prediction. The cell's strongest pixel moves from one spot of the texture to
-  // another as the image moves (a 7 x 7 cell's argmax of lambda_min), and each move ended an id;
-  // kept, the point is re-detected where assign will find it. Allocation-free once warm.
+  // have run on `left`): where a feature of the previous pair is predicted (the motion of pass 1,
+  // over these detections; assign then takes it: one motion per pair) at a pixel whose window
+  // passes the detector's gate and is usable, that pixel replaces its cell's detection, unless the
+  // detection already sits within match_px of the prediction. The cell's strongest pixel moves from
+  // one spot of the texture to another as the image moves (a 7 x 7 cell's argmax of lambda_min), and
+  // each move ended an id; kept, the point is re-detected where assign will find it. Allocation-free
+  // once warm.
   void keep_tracked(const GrayView& left, const FeatureDetector& det, const std::uint8_t* usable,
                     double noise_sigma, std::vector<Feature>& features);
   // Forget the previous pair (a new source, a seek): every feature gets a new id.
-  void reset() { prev_.clear(); }
+  void reset() {
+    prev_.clear();
+    motion_ready_ = false;
+  }
   const FeatureIdSettings& settings() const { return s_; }
 
  private:
@@ -114,6 +118,7 @@ class FeatureIds {
   std::vector<int> detected_in_cell_;  // keep_tracked: per detector cell, its feature's index or -1
   std::vector<std::uint8_t> cell_kept_;
   std::int64_t next_id_ = 0;
+  bool motion_ready_ = false;  // keep_tracked estimated this pair's motion: assign takes it
 };
 
 }  // namespace naneye::recon::scene
