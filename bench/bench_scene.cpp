@@ -8,8 +8,9 @@
 // by more than 5 %. CPU time of this thread per pair, OpenCV limited to one thread.
 //   build/bench/bench_scene [--seeds N] [--repeat N] [--bayer] [--real-sensor] [--defocus SIGMA]
 //       [--refusals] [--digest] [--residual-p P] [--max-sigma PX] [--min-zncc Z] [--min-final-zncc Z]
-//       [--raw-search] [--max-shift-sigma PX] [--wide-radius R] [--wide-step S] [--dense-radius R]
-//       [--max-radius R] [--dense-iterations N] [--gain E_PER_DN] [--read-noise DN] [--no-vignetting]
+//       [--raw-search] [--max-shift-sigma PX] [--max-points N] [--wide-radius R] [--wide-step S]
+//       [--dense-radius R] [--max-radius R] [--dense-iterations N] [--gain E_PER_DN] [--read-noise DN]
+//       [--no-vignetting]
 //       [--supersample N] [--sparse-only] [--curvature-radius PX] [--wide-false-reject P] [--nested-only]
 // --refusals: the dense path's MatchCounts per scene (each rectified pixel counted at the first
 // validity test it fails), summed over the renders, in % of the candidates; and the sparse path's
@@ -17,11 +18,13 @@
 // dense validity tests' (dense_match.hpp); --min-zncc Z, --min-final-zncc Z, the sparse coarse
 // search's and LK match's acceptance (sparse.hpp); --raw-search, that search on the unfiltered mono
 // luminance (SparseSettings::search_binomial off); --max-shift-sigma PX, the feature gate's
-// Cramer-Rao shift bound (FeatureSettings, features.hpp); --wide-radius R, the sparse path's wider LK
-// window (0: the narrow window only); --wide-step S, its nested widening's ring, px (sparse.hpp);
-// --curvature-radius PX, the curvature model's neighbourhood (0: off); --wide-false-reject P, the
-// widening's tests' false-reject rate; --nested-only, the ladder for every feature, without the one
-// step to the widest window first (SparseSettings::wide_direct off). --sparse-only: the sparse paths alone
+// Cramer-Rao shift bound (FeatureSettings, features.hpp); --max-points N, the valid points where
+// matching stops (SparseSettings::max_points: fewer, the strongest, in less time); --wide-radius R,
+// the sparse path's wider LK window (0: the narrow window only); --wide-step S, its nested
+// widening's ring, px (sparse.hpp); --curvature-radius PX, the curvature model's neighbourhood (0: off);
+// --wide-false-reject P, the widening's tests' false-reject rate; --nested-only, the ladder for every
+// feature, without the one step to the widest window first (SparseSettings::wide_direct off). --sparse-only:
+// the sparse paths alone
 // (~15 s, not ~2 min). The sparse table's last columns: rms(err / depth_sigma_mm) over our good points, the
 // sigma's honesty (0.7-1.4 is the band), and our mean error over the OpenCV path's (the issue's
 // target: <= 0.5). --dense-radius R: the dense sub-pixel window, fixed;
@@ -164,6 +167,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--max-shift-sigma") && i + 1 < argc)
       ss.features.max_shift_sigma_px = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--min-final-zncc") && i + 1 < argc) ss.min_final_zncc = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--max-points") && i + 1 < argc) ss.max_points = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-radius") && i + 1 < argc) ss.wide_radius = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--wide-step") && i + 1 < argc) ss.wide_step = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--nested-only")) ss.wide_direct = false;
