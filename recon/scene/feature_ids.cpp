@@ -72,7 +72,8 @@ float FeatureIds::zncc(const GrayView& a, int ua, int va, const Window& wa, cons
 float FeatureIds::zncc_resampled(const GrayView& a, int ua, int va, const Window& wa, const GrayView& b,
                                  double xb, double yb) {
   const int r = s_.radius;
-  if (wa.inv_norm == 0 || xb - r < 1 || yb - r < 1 || xb + r >= b.width - 3 || yb + r >= b.height - 3)
+  // Written so that a NaN place fails it too.
+  if (wa.inv_norm == 0 || !(xb - r >= 1 && yb - r >= 1 && xb + r < b.width - 3 && yb + r < b.height - 3))
     return -1;
   // Every sample of the window has the same fractional place: the weights once (computed per sample
   // they were ~9 M of the sparse path's ~190 M instructions per pair on a hand-held sequence), the
