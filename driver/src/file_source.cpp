@@ -25,7 +25,8 @@ SourceInfo file_info(const FileUri& o, std::string uri) {
 
 FileSource::FileSource(FileUri options, std::string uri_text)
     : ByteStreamSource(file_info(options, std::move(uri_text)), options.stream),
-      options_(std::move(options)) {}
+      options_(std::move(options)),
+      clock_(options_.speed == FileUri::Speed::factor ? options_.factor : 1.0) {}
 
 FileSource::~FileSource() {
   stop();
@@ -40,15 +41,15 @@ void FileSource::open() {
 
 bool FileSource::pace(std::int64_t recorded_ns) {
   if (options_.speed == FileUri::Speed::max) return !stopping();
-  if (!pass_timed_) {
-    pass_timed_ = true;
-    pass_first_ns_ = recorded_ns;
-    pass_start_ = std::chrono::steady_clock::now();
-    return !stopping();
+  const auto due = clock_.due(recorded_ns, std::chrono::steady_clock::now());
+  if (clock_.resyncs() != resyncs_logged_) {
+    if (resyncs_logged_ == 0)
+      log()->info(
+          "{}: the replay was held more than {} ms; it goes on from the late record at the "
+          "recorded spacing (said once)",
+          info().uri, ReplayClock::kHeldAfter.count());
+    resyncs_logged_ = clock_.resyncs();
   }
-  const double scale = options_.speed == FileUri::Speed::factor ? 1.0 / options_.factor : 1.0;
-  const auto due = pass_start_ + std::chrono::nanoseconds(static_cast<std::int64_t>(
-                                     static_cast<double>(recorded_ns - pass_first_ns_) * scale));
   return sleep_until(due);
 }
 
@@ -83,7 +84,7 @@ void FileSource::on_record_start(std::int64_t sensor_ns) {
 
 void FileSource::run() {
   for (;;) {
-    pass_timed_ = false;
+    clock_.restart();
     const std::uint64_t before = records_committed();
     try {
       if (!(neyd_ ? play_neyd() : play_raw())) return;

@@ -2,7 +2,8 @@
 // file://: replays a .raw dump (the spec's byte stream, fed in transfer-sized pieces) or a .neyd
 // capture (its chunks as recorded) through the parser live capture runs.
 //   speed=realtime  follows the recorded timing (.neyd chunk times; .raw record timestamps), and
-//                   hands over like a live source (drop-oldest);
+//                   hands over like a live source (drop-oldest); a replay thread held by the machine
+//                   goes on at the recorded spacing instead of catching up (ReplayClock);
 //   speed=<factor>  the same, time divided by the factor;
 //   speed=max       as fast as the consumer takes pairs, never dropping one (blocking hand-over).
 //   loop=1          starts over at the end, forever (the timeline keeps going forward).
@@ -11,6 +12,7 @@
 #include <string>
 
 #include "naneye/driver/byte_stream_source.hpp"
+#include "naneye/driver/replay_clock.hpp"
 #include "naneye/driver/source_uri.hpp"
 
 namespace naneye::driver {
@@ -33,9 +35,8 @@ class FileSource : public ByteStreamSource {
 
   FileUri options_;
   bool neyd_ = false;
-  std::chrono::steady_clock::time_point pass_start_;
-  std::int64_t pass_first_ns_ = 0;
-  bool pass_timed_ = false;
+  ReplayClock clock_;
+  std::uint64_t resyncs_logged_ = 0;
 };
 
 }  // namespace naneye::driver
