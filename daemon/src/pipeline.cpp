@@ -20,9 +20,8 @@ Pipeline::Pipeline(const Settings& settings, std::unique_ptr<PairProcessor> proc
     : settings_(settings),
       started_(std::chrono::steady_clock::now()),
       processor_(with_rig(std::move(processor), *rig)),
-      processor_name_(processor_->name()),
       source_(std::move(opener), std::move(choice)),
-      reload_(std::move(rig), started_),
+      reload_(std::move(rig), *processor_, started_),
       // Every buffer a result slot will hold, sized now: the worker then allocates nothing per pair.
       publication_(static_cast<std::size_t>(settings.history), settings.frame_snapshot_interval_ms,
                    *processor_) {}
@@ -56,7 +55,7 @@ void Pipeline::reload_refused(std::string reason) {
 void Pipeline::run() {
   while (!stop_.load()) {
     heartbeat_.fetch_add(1, std::memory_order_relaxed);
-    reload_.apply_pending(processor_, processor_name_);
+    reload_.apply_pending(processor_);
     driver::FrameSource* src = source_.ready();
     if (!src) continue;
     if (auto pair = src->next(std::chrono::milliseconds(50))) {
@@ -96,7 +95,6 @@ void Pipeline::handle(driver::PairPtr pair) {
 PipelineStatus Pipeline::status() const {
   PipelineStatus s;
   s.choice = source_.choice();
-  s.processor = processor_name_;
   stats_.fill(s);
   reload_.fill(s);
   s.uptime_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();

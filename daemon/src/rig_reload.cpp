@@ -4,9 +4,9 @@
 
 namespace naneye::daemon {
 
-RigReload::RigReload(std::shared_ptr<const recon::StereoRig> rig,
+RigReload::RigReload(std::shared_ptr<const recon::StereoRig> rig, const app::PairProcessor& processor,
                      std::chrono::steady_clock::time_point started)
-    : started_(started), rig_(rig), applied_(std::move(rig)) {}
+    : started_(started), rig_(rig), applied_(std::move(rig)), name_(processor.name()) {}
 
 double RigReload::uptime_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
@@ -34,7 +34,7 @@ std::shared_ptr<const recon::StereoRig> RigReload::rig() const {
   return rig_;
 }
 
-void RigReload::apply_pending(std::unique_ptr<app::PairProcessor>& processor, std::string_view name) {
+void RigReload::apply_pending(std::unique_ptr<app::PairProcessor>& processor) {
   if (!pending_.exchange(false)) return;
   std::shared_ptr<const recon::StereoRig> next;
   std::unique_ptr<app::PairProcessor> prepared;
@@ -44,8 +44,12 @@ void RigReload::apply_pending(std::unique_ptr<app::PairProcessor>& processor, st
     prepared = std::move(prepared_);
   }
   try {
-    if (prepared && prepared->name() == name) {
+    if (prepared && prepared->scene() == processor->scene() && prepared->dense() == processor->dense()) {
       processor.swap(prepared);
+      {
+        std::lock_guard lock(outcome_mu_);
+        name_ = processor->name();
+      }
       std::lock_guard lock(mu_);
       if (!retired_) retired_ = std::move(prepared);  // else it is freed here: a storm outran release
     } else {
@@ -86,6 +90,7 @@ void RigReload::fill(PipelineStatus& s) const {
   s.calibration_reload_failures = failures_.load();
   std::lock_guard lock(outcome_mu_);
   s.last_reload = last_;
+  s.processor = name_;
 }
 
 }  // namespace naneye::daemon

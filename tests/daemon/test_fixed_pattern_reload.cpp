@@ -1,6 +1,7 @@
 // [sensor] fixed_pattern in the running daemon: the status names the pattern in use, and SIGHUP
 // reloads it with the calibration; a file that cannot be used is refused there, naming it, and the
-// pattern in use stays (docs/sensor-calibration.md).
+// pattern in use stays (docs/sensor-calibration.md). The replay runs at half speed: its ring then
+// spans 258 ms, so a pair dropped here is the reload's, not a loaded machine's pre-emption.
 #include <fstream>
 
 #include "naneye/sim/flat_field.hpp"
@@ -14,7 +15,7 @@ TEST_F(NaneyedTest, SighupReloadsTheFixedPatternAndARefusedOneKeepsTheOneInUse) 
   recon::save_fixed_pattern(pattern, sim::measure_fixed_pattern(sim::SensorSettings{}, 16, 0.7, 1));
   const auto file = capture(30);
   start("[source]\nuri = \"file://" + file.string() +
-        "?speed=realtime&loop=1\"\n[board]\ndetect = true\n[sensor]\nfixed_pattern = \"" + pattern.string() +
+        "?speed=0.5&loop=1\"\n[board]\ndetect = true\n[sensor]\nfixed_pattern = \"" + pattern.string() +
         "\"\n");
   auto s = wait_status([](const nlohmann::json& j) { return j["pairs"]["processed"] > 3; });
   EXPECT_NE(s["processor"].get<std::string>().find("fixed pattern removed (fp.yml.gz"), std::string::npos)
@@ -33,10 +34,17 @@ TEST_F(NaneyedTest, SighupReloadsTheFixedPatternAndARefusedOneKeepsTheOneInUse) 
   s = wait_status([&](const nlohmann::json& j) { return j["pairs"]["processed"].get<int>() > before + 3; });
   EXPECT_EQ(s["state"], "streaming");
 
-  recon::save_fixed_pattern(pattern, sim::measure_fixed_pattern(sim::SensorSettings{}, 16, 0.7, 2));
+  // Another sensor's pattern: its figures, not the first one's, are what the status names.
+  sim::SensorSettings other;
+  other.dsnu_dn = 3.0;
+  recon::save_fixed_pattern(pattern, sim::measure_fixed_pattern(other, 16, 0.7, 2));
   daemon->signal(SIGHUP);
   s = wait_status([](const nlohmann::json& j) { return j["calibration"]["reloads"] == 1; });
   EXPECT_EQ(s["calibration"]["last_reload"]["ok"], true);
+  EXPECT_EQ(s["processor"].get<std::string>().find("DSNU 0.5 / 0.5 DN"), std::string::npos) << s["processor"];
+  EXPECT_NE(s["processor"].get<std::string>().find("fixed pattern removed (fp.yml.gz: DSNU 3."),
+            std::string::npos)
+      << s["processor"];
   EXPECT_EQ(s["counters"]["pairs_dropped"], 0);
   EXPECT_EQ(daemon->stop(SIGTERM).first, 0) << daemon->log();
 }

@@ -72,7 +72,6 @@ class Pipeline {
   Settings settings_;
   std::chrono::steady_clock::time_point started_;
   std::unique_ptr<PairProcessor> processor_;  // worker only (swapped by reload_ between pairs)
-  std::string processor_name_;                // fixed: every processor comes from the settings
   SourceSupervisor source_;
   RigReload reload_;
   Publication publication_;
