@@ -21,6 +21,7 @@ using daemon::test::scene_rig;
 
 struct MeasuredScene : ::testing::Test {
   static void SetUpTestSuite() {
+    test::keep_opencv_on_this_thread();  // before the renders: NothingIsAllocatedPerPair counts
     const sim::SensorSettings sensor = sim::SensorSettings::measured(false);
     const sim::TexturedRenderer renderer(scene_rig(), sensor, 1);
     sim::Rng rng(3);

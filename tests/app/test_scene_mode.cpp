@@ -118,6 +118,7 @@ TEST(SceneMode, TheResultJsonCarriesTheSceneObjectOnlyWhenTheSceneRan) {
 // Once warm, a pair allocates nothing: the board and sparse halves and the daemon's own glue
 // (`depth` null), then the whole step with the dense map (`with_dense`).
 static void expect_no_allocation_per_pair(bool with_dense) {
+  naneye::test::keep_opencv_on_this_thread();
   for (bool bayer : {false, true}) {
     auto proc = processor(app::ReconMode::both);
     std::vector<driver::StereoPair> pairs;

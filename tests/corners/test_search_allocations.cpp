@@ -22,6 +22,7 @@ struct Frame {
 };
 
 TEST(CornerAllocation, FullSearchAllocatesNothingAfterTheFirstFrame) {
+  naneye::test::keep_opencv_on_this_thread();
   const StereoRig& rig = test::paper_d3();
   std::mt19937_64 rng(31);
   std::vector<Frame> frames;

@@ -13,6 +13,7 @@ namespace naneye::recon {
 namespace {
 
 TEST(CornerAllocation, TrackedFramesAllocateNothing) {
+  naneye::test::keep_opencv_on_this_thread();
   // The counter itself must see allocations, or the test could not fail.
   const long probe_before = naneye::test::heap_allocations();
   auto* probe = new std::vector<int>(16);

@@ -18,6 +18,7 @@ TEST_F(NaneyedTest, SighupReloadsTheFixedPatternAndARefusedOneKeepsTheOneInUse) 
         "?speed=0.5&loop=1\"\n[board]\ndetect = true\n[sensor]\nfixed_pattern = \"" + pattern.string() +
         "\"\n");
   auto s = wait_status([](const nlohmann::json& j) { return j["pairs"]["processed"] > 3; });
+  const auto dropped_before = s["counters"]["pairs_dropped"].get<int>();  // the start's are not the reloads'
   EXPECT_NE(s["processor"].get<std::string>().find("fixed pattern removed (fp.yml.gz"), std::string::npos)
       << s["processor"];
 
@@ -45,7 +46,7 @@ TEST_F(NaneyedTest, SighupReloadsTheFixedPatternAndARefusedOneKeepsTheOneInUse) 
   EXPECT_NE(s["processor"].get<std::string>().find("fixed pattern removed (fp.yml.gz: DSNU 3."),
             std::string::npos)
       << s["processor"];
-  EXPECT_EQ(s["counters"]["pairs_dropped"], 0);
+  EXPECT_EQ(s["counters"]["pairs_dropped"], dropped_before);
   EXPECT_EQ(daemon->stop(SIGTERM).first, 0) << daemon->log();
 }
 

@@ -25,7 +25,10 @@ TEST_F(NaneyedTest, FiveHundredSlowConnectionsDoNotStarveANormalClient) {
     getrlimit(RLIMIT_NOFILE, &rl);
   }
   if (rl.rlim_cur < 1200) GTEST_SKIP() << "needs 1200 descriptors, the hard limit is " << rl.rlim_max;
-  start(looping_source(capture(20)));
+  // The slow heads get 10 s to send theirs, not the default 2 s: everything below must happen before
+  // the first head's deadline (0.6-1.5 s estimated for a sanitizer build on a loaded 2-core machine).
+  // This test is about starvation; the deadline has its own test below.
+  start("head_timeout_ms = 10000\n" + looping_source(capture(20)));
   wait_status([](const nlohmann::json& s) { return s["pairs"]["processed"] > 1; });
   std::vector<std::unique_ptr<RawClient>> slow;
   for (int i = 0; i < 500; ++i) {

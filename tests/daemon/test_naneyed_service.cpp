@@ -47,7 +47,9 @@ std::vector<Event> read_events(httplib::Client& client, const std::string& path,
 TEST_F(NaneyedTest, AnEventClientReceivesEveryPairOfAMaxSpeedReplay) {
   const int n = 150;
   const auto file = capture(n);
-  const auto st = serve_replay(file, n, "[pipeline]\nhistory = 256\n");
+  // Until the replay has ended: a pair is counted after the ring took it, so a status read while the
+  // worker publishes the last pair may still show n - 1 pairs.
+  const auto st = serve_replay(file, n, "[pipeline]\nhistory = 256\n", true);
   EXPECT_EQ(st["source"]["live"], false);
   EXPECT_EQ(st["counters"]["pairs_dropped"], 0);
   EXPECT_EQ(st["counters"]["pairs"], n);
@@ -129,8 +131,15 @@ TEST_F(NaneyedTest, SigtermWithAnOpenEventStreamExitsZeroWithinASecond) {
   const auto [code, took] = daemon->stop(SIGTERM);
   sse.join();
   EXPECT_EQ(code, 0) << daemon->log();
-  EXPECT_LT(took.count(), 1000) << daemon->log();
-  EXPECT_NE(daemon->log().find("SIGTERM: stopping"), std::string::npos);
+  // The daemon's own figure (pipeline and HTTP stopped) is the one the docs promise; the wall clock
+  // from kill() to waitpid() adds the process's exit, which a loaded machine stretches, and must
+  // stay within systemd's TimeoutStopSec (5 s).
+  const std::string log = daemon->log();
+  const auto at = log.find("stopped in ");
+  ASSERT_NE(at, std::string::npos) << log;
+  EXPECT_LT(std::stod(log.substr(at + 11)), 1000.0) << log;
+  EXPECT_LT(took.count(), 4000) << log;
+  EXPECT_NE(log.find("SIGTERM: stopping"), std::string::npos);
 }
 
 TEST_F(NaneyedTest, SighupReloadsTheCalibrationWithoutDroppingTheStream) {
@@ -145,7 +154,7 @@ TEST_F(NaneyedTest, SighupReloadsTheCalibrationWithoutDroppingTheStream) {
   });
   EXPECT_EQ(after["state"], "streaming");
   EXPECT_EQ(after["source"]["opens"], 1) << "the source was not reopened";
-  EXPECT_EQ(after["counters"]["pairs_dropped"], 0);
+  EXPECT_EQ(after["counters"]["pairs_dropped"], before["counters"]["pairs_dropped"]);  // none by the reload
   EXPECT_NE(daemon->log().find("calibration reloaded"), std::string::npos);
   EXPECT_EQ(daemon->stop(SIGTERM).first, 0);
 }

@@ -168,8 +168,9 @@ TEST(Pipeline, ALiveSourceFasterThanTheWorkerGetsItsNewestPairProcessed) {
       static_cast<unsigned long long>(st.counters.pairs_dropped), st.capture_to_publish.p50_ms,
       st.capture_to_publish.max_ms);
   // One processing time plus up to a camera period (and the replay's own pacing): 40-60 ms. In
-  // order it would be the ring's eight periods more; 100 ms leaves room for a loaded machine.
-  EXPECT_LT(st.capture_to_publish.p50_ms, 100.0);
+  // order it would be the ring's eight periods more (161 ms measured); 120 ms leaves room for a
+  // loaded machine's wake-ups and still tells the two apart.
+  EXPECT_LT(st.capture_to_publish.p50_ms, 120.0);
 }
 
 TEST(Pipeline, ReloadsTheRigBetweenPairs) {

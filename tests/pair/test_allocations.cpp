@@ -46,6 +46,7 @@ int observations(const recon::StereoReconstructor& rec,
 }  // namespace
 
 TEST(Allocations, ReconstructPairAllocatesNothingPerPair) {
+  naneye::test::keep_opencv_on_this_thread();
   const auto seq = smooth_sequence(6);
   recon::StereoReconstructor rec(test::paper_d3(), {});
   recon::PairResult out;
@@ -77,6 +78,7 @@ TEST(Allocations, ReconstructPairAllocatesNothingPerPair) {
 
 // process() as a whole on a tracked stream: detection (tracking) plus reconstruct_pair.
 TEST(Allocations, ProcessAllocatesNothingPerTrackedPair) {
+  naneye::test::keep_opencv_on_this_thread();
   const auto seq = smooth_sequence(6);
   recon::StereoReconstructor rec(test::paper_d3(), {});
   recon::PairResult out;

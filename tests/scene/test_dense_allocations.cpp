@@ -18,9 +18,7 @@ namespace naneye {
 namespace {
 
 TEST(DenseAllocations, NoneOncePairsFlow) {
-  // As the processor runs it (app/src/processor.cpp): OpenCV on the calling thread (its pool's
-  // bookkeeping allocates, should any cv:: call on the path use it).
-  cv::setNumThreads(1);
+  test::keep_opencv_on_this_thread();
   // The third case: a calibration with its covariance, so that every depth also gets its
   // calibration sigma (CalibrationSigmaTable, the exact propagation beyond the table's band).
   for (const auto& [bayer, covariance] :

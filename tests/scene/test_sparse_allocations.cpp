@@ -12,11 +12,7 @@ namespace naneye {
 namespace {
 
 TEST(SparseAllocations, NoneOncePairsFlow) {
-  // OpenCV on the calling thread, as the processor runs it (app/src/processor.cpp): the counter is
-  // the process's, and the renders' cv::GaussianBlur woke the pool's workers, whose late
-  // bookkeeping once landed between the counts (a failure under ctest -j2, 2026-12-07, that the
-  // test alone never showed in 27 runs).
-  cv::setNumThreads(1);
+  test::keep_opencv_on_this_thread();
   for (bool bayer : {false, true}) {
     const auto& a = test::textured_pair("plane", bayer);
     const auto& b = test::textured_pair("tube", bayer);

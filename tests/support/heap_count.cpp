@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <new>
+#include <opencv2/core/utility.hpp>
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define NANEYE_COUNT_MALLOC 0
@@ -50,6 +51,10 @@ long naneye::test::heap_allocations() {
 
 bool naneye::test::heap_counts_malloc() {
   return NANEYE_COUNT_MALLOC != 0;
+}
+
+void naneye::test::keep_opencv_on_this_thread() {
+  cv::setNumThreads(1);
 }
 
 #if NANEYE_COUNT_MALLOC

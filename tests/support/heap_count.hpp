@@ -10,5 +10,10 @@ namespace naneye::test {
 long heap_allocations();
 // False in the sanitizer builds, where the C allocator belongs to the sanitizer (operator new only).
 bool heap_counts_malloc();
+// OpenCV on the calling thread (cv::setNumThreads(1)), as the processor runs it (app/src/processor.cpp).
+// Call it before a test renders anything: the count is the whole process's, and a render's
+// cv::GaussianBlur wakes OpenCV's pool, whose workers' late bookkeeping once landed between the
+// counts (SparseAllocations under ctest -j2, 2026-12-07, never seen with the test alone).
+void keep_opencv_on_this_thread();
 
 }  // namespace naneye::test
