@@ -7,6 +7,7 @@
 
 #include "log.hpp"
 #include "naneye/base/clock.hpp"
+#include "naneye/driver/replay_clock.hpp"
 
 namespace naneye::driver {
 namespace {
@@ -128,7 +129,7 @@ bool ImageSource::play_pass(std::vector<std::uint8_t>& record) {
   std::array<std::vector<std::uint16_t>, 2> eyes;  // swapped with image.pixels: buffers are reused
   std::size_t fed = 0, skipped = 0;
   std::string last_error;
-  const auto t0 = std::chrono::steady_clock::now();
+  ReplayClock pace;  // the fps's spacing; a held pass goes on from its late pair
   const std::uint64_t first = pair_clock_;
   for (const auto& [left, right] : list_.pairs) {
     if (stopping()) return false;
@@ -150,8 +151,9 @@ bool ImageSource::play_pass(std::vector<std::uint8_t>& record) {
       continue;
     }
     if (options_.fps > 0 &&
-        !sleep_until(t0 + std::chrono::nanoseconds(static_cast<std::int64_t>(
-                              static_cast<double>(pair_clock_ - first) * 1e9 / options_.fps))))
+        !sleep_until(
+            pace.due(static_cast<std::int64_t>(static_cast<double>(pair_clock_ - first) * 1e9 / options_.fps),
+                     std::chrono::steady_clock::now())))
       return false;
     const double tick_fps = options_.fps > 0 ? options_.fps : kUnpacedFps;
     const auto ticks = static_cast<std::uint32_t>(

@@ -10,6 +10,7 @@
 #include "log.hpp"
 #include "naneye/base/clock.hpp"
 #include "naneye/base/enum_table.hpp"
+#include "naneye/driver/replay_clock.hpp"
 #include "naneye/recon/camera/calibration_io.hpp"
 #include "naneye/sim/flat_field.hpp"
 #include "naneye/sim/stream.hpp"
@@ -223,8 +224,8 @@ void SimSource::stream(const TimingSettings& timing, Rng& rng, const RenderPair&
       [this](std::span<const std::uint8_t> b, std::int64_t) { feed(b, base::monotonic_ns()); }, {}, 0,
       static_cast<std::uint8_t>(rng()));
   std::vector<std::uint16_t> left(driver::kPixelCount), right(driver::kPixelCount);
-  const auto t0 = std::chrono::steady_clock::now();
-  std::uint64_t late = 0;
+  driver::ReplayClock pace;  // the camera's spacing; a held or slow render goes on from its late record
+  std::uint64_t resyncs = 0;
   for (std::uint64_t i = 0; options_.pairs == 0 || i < options_.pairs; ++i) {
     if (stopping()) return;
     const PairTime pt = clock.next(rng);
@@ -234,11 +235,17 @@ void SimSource::stream(const TimingSettings& timing, Rng& rng, const RenderPair&
     for (int eye = 0; eye < 2; ++eye) {
       const std::uint64_t ticks = eye == 0 ? pt.left_ticks : pt.right_ticks;
       if (options_.realtime) {
-        const auto due = t0 + std::chrono::nanoseconds(static_cast<std::int64_t>(
-                                  static_cast<double>(ticks - start_ticks) * 1e9 / driver::kTickHz));
-        if (std::chrono::steady_clock::now() > due + std::chrono::milliseconds(100) && late++ % 100 == 0)
-          log()->warn("sim://{}: rendering cannot hold {} fps in real time (pairs arrive late)",
-                      options_.preset, options_.fps);
+        const auto due = pace.due(
+            static_cast<std::int64_t>(static_cast<double>(ticks - start_ticks) * 1e9 / driver::kTickHz),
+            std::chrono::steady_clock::now());
+        if (pace.resyncs() != resyncs) {
+          if (resyncs % 100 == 0)
+            log()->warn(
+                "sim://{}: a record more than {} ms late (rendering slower than {} fps, or the "
+                "machine held it): pairs go on from it at the camera's spacing",
+                options_.preset, driver::ReplayClock::kHeldAfter.count(), options_.fps);
+          resyncs = pace.resyncs();
+        }
         if (!sleep_until(due)) return;
       }
       writer.write(eye == 0 ? driver::Sensor::left : driver::Sensor::right, static_cast<std::uint32_t>(ticks),
