@@ -19,14 +19,14 @@
 // search's and LK match's acceptance (sparse.hpp); --raw-search, that search on the unfiltered mono
 // luminance (SparseSettings::search_binomial off); --max-shift-sigma PX, the feature gate's
 // Cramer-Rao shift bound (FeatureSettings, features.hpp); --max-points N, the valid points where
-// matching stops (SparseSettings::max_points: fewer, the strongest, in less time); --wide-radius R,
-// the sparse path's wider LK window (0: the narrow window only); --wide-step S, its nested
-// widening's ring, px (sparse.hpp); --curvature-radius PX, the curvature model's neighbourhood (0: off);
-// --wide-false-reject P, the widening's tests' false-reject rate; --nested-only, the ladder for every
-// feature, without the one step to the widest window first (SparseSettings::wide_direct off). --sparse-only:
-// the sparse paths alone
-// (~15 s, not ~2 min). The sparse table's last columns: rms(err / depth_sigma_mm) over our good points, the
-// sigma's honesty (0.7-1.4 is the band), and our mean error over the OpenCV path's (the issue's
+// matching stops (SparseSettings::max_points: fewer points in less time; the covering lattice is
+// tried first whatever N, so they are not the strongest); --wide-radius R, the sparse path's wider
+// LK window (0: the narrow window only); --wide-step S, its nested widening's ring, px (sparse.hpp);
+// --curvature-radius PX, the curvature model's neighbourhood (0: off); --wide-false-reject P, the
+// widening's tests' false-reject rate; --nested-only, the ladder for every feature, without the one
+// step to the widest window first (SparseSettings::wide_direct off). --sparse-only: the sparse paths
+// alone (~15 s, not ~2 min). The sparse table's last columns: rms(err / depth_sigma_mm) over our good points,
+// the sigma's honesty (0.7-1.4 is the band), and our mean error over the OpenCV path's (the issue's
 // target: <= 0.5). --dense-radius R: the dense sub-pixel window, fixed;
 // --max-radius R: the largest window the matcher may choose per pair (R = 3: fixed at 3, as before
 // the choice). --dense-iterations N: the dense sub-pixel step's Gauss-Newton passes (default 4). The dense
