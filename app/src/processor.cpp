@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "naneye/app/fixed_pattern_step.hpp"
+#include "naneye/app/helper_thread.hpp"
 #include "naneye/app/scene_json.hpp"
 #include "naneye/recon/pair/stereo_reconstructor.hpp"
 #include "naneye/recon/scene/dense.hpp"
@@ -55,8 +56,9 @@ std::string step_name(const ProcessorSettings& s) {
   if (s.mode == ReconMode::board)
     return "board reconstruction (corners, " + method_text(s.reconstructor.reconstruction.method) +
            ", board pose)";
-  if (s.mode == ReconMode::scene) return "scene reconstruction (sparse features, dense depth map)";
-  return "board and scene reconstruction (corners, board pose; sparse features, dense depth map)";
+  const std::string dense = s.threads > 1 ? "dense depth map on a second thread" : "dense depth map";
+  if (s.mode == ReconMode::scene) return "scene reconstruction (sparse features, " + dense + ")";
+  return "board and scene reconstruction (corners, board pose; sparse features, " + dense + ")";
 }
 
 // The product's processing step: the board (issue #5: both eyes' corners, triangulation, board
@@ -88,6 +90,9 @@ class Reconstruction final : public PairProcessor {
       sparse_.emplace(rig, settings_.sparse);
       dense_.emplace(rig);
       map_pixels_ = static_cast<std::size_t>(rig.left.width()) * static_cast<std::size_t>(rig.left.height());
+      // The dense map beside the sparse points only when it does not start from their band.
+      if (settings_.threads > 1 && !dense_->settings().band_from_sparse && !helper_)
+        helper_.emplace([this] { dense_->reconstruct(sparse_->luma(), *helper_depth_, nullptr); });
     }
   }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
@@ -97,15 +102,34 @@ class Reconstruction final : public PairProcessor {
   }
   void process_pair(const driver::StereoPair& pair, recon::PairResult& out, SceneResult& scene,
                     recon::scene::DepthMap* depth) override {
-    process(pair, out);
+    if (!sparse_) {
+      process(pair, out);
+      scene.clear();
+      return;
+    }
+    fill_pair_identity(pair, out);
+    views(pair);
     scene.clear();
-    if (!sparse_) return;
     // One demosaic and one luminance for both scene paths.
     sparse_->load_luma(left_, right_);
-    sparse_->reconstruct(sparse_->luma(), scene.sparse);
-    scene.computed = true;
-    if (dense_ && depth) {
-      dense_->reconstruct(sparse_->luma(), *depth, &scene.sparse);
+    if (helper_ && depth) {
+      // The dense map on the helper while this thread reads the board and the sparse points: they
+      // share only what both read (the luminance, the frames), and the helper is done before any
+      // of it changes (finish() even when this half throws).
+      helper_depth_ = depth;
+      helper_->start();
+      try {
+        board_and_sparse(out, scene);
+      } catch (...) {
+        helper_->finish();
+        throw;
+      }
+      helper_->finish();
+    } else {
+      board_and_sparse(out, scene);
+      if (depth) dense_->reconstruct(sparse_->luma(), *depth, &scene.sparse);
+    }
+    if (depth) {
       scene.dense = true;
       scene.depth = summarize(*depth);
     }
@@ -124,6 +148,12 @@ class Reconstruction final : public PairProcessor {
   std::string_view name() const override { return name_; }
 
  private:
+  void board_and_sparse(recon::PairResult& out, SceneResult& scene) {
+    if (board_) board_->process(left_, right_, out);
+    sparse_->reconstruct(sparse_->luma(), scene.sparse);
+    scene.computed = true;
+  }
+
   // The frames every path reads: the pair's own, or with the sensor's fixed pattern removed.
   void views(const driver::StereoPair& pair) {
     left_ = image_view(pair.left);
@@ -142,15 +172,19 @@ class Reconstruction final : public PairProcessor {
   std::size_t map_pixels_ = 0;  // the left raw grid's, for the dense maps' capacity
   std::optional<FixedPatternStep> fixed_;
   recon::RawImageView left_, right_;
+  recon::scene::DepthMap* helper_depth_ = nullptr;  // the map the helper fills for this pair
+  // Last: its destructor waits for the helper before the reconstructors it uses go.
+  std::optional<HelperThread> helper_;
 };
 
 }  // namespace
 
 std::unique_ptr<PairProcessor> make_processor(const ProcessorSettings& settings) {
   if (!settings.detect) return std::make_unique<TimingOnly>();
-  // The per-pair step is written for one core. OpenCV's own thread pool (TBB workers that spin while
-  // idle) only takes the other core from the capture and HTTP threads: measured, it tripled naneyed's
-  // time per pair on 2 cores (and its uninstrumented threads blind ThreadSanitizer).
+  // OpenCV's own thread pool (TBB workers that spin while idle) only takes the other core from the
+  // capture and HTTP threads: measured, it tripled naneyed's time per pair on 2 cores (and its
+  // uninstrumented threads blind ThreadSanitizer). The step's one second thread ([recon] threads,
+  // HelperThread) sleeps in a futex between pairs.
   cv::setNumThreads(1);
   return std::make_unique<Reconstruction>(settings);
 }

@@ -20,6 +20,7 @@ std::string ProcessorSettings::check() const {
   if (!(reconstructor.reconstruction.corner_sigma_px > 0))
     return "pipeline.corner_sigma_px: must be above 0, got " +
            std::to_string(reconstructor.reconstruction.corner_sigma_px);
+  if (threads != 1 && threads != 2) return "recon.threads: expected 1 or 2, got " + std::to_string(threads);
   return {};
 }
 

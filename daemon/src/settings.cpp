@@ -127,6 +127,7 @@ std::map<std::string, Setter> setters(Settings& s, const std::filesystem::path& 
          else
            fail(k, "expected one of " + base::enum_names(app::kReconModeNames) + ", got \"" + v + "\"");
        }},
+      {"recon.threads", integer(s.processor.threads, 1, 2)},
       {"sensor.fixed_pattern",
        [&s, base](const toml::node& n, const std::string& k) {
          s.processor.fixed_pattern = resolve(base, get_string(n, k));

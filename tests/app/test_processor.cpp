@@ -24,6 +24,8 @@ TEST(Processor, NameReportsTheConfiguredTriangulation) {
   s.reconstructor.reconstruction.method = recon::TriangulationMethod::midpoint;
   EXPECT_EQ(name_of(s), "board reconstruction (corners, midpoint, board pose)");
   s.mode = app::ReconMode::scene;
+  EXPECT_EQ(name_of(s), "scene reconstruction (sparse features, dense depth map on a second thread)");
+  s.threads = 1;
   EXPECT_EQ(name_of(s), "scene reconstruction (sparse features, dense depth map)");
   s.detect = false;
   EXPECT_EQ(name_of(s), "timing only (board.detect = false)");
@@ -51,6 +53,9 @@ TEST(Processor, SettingsDefaultToReconsAndCheckNamesTheKey) {
   s = defaults;
   s.reconstructor.reconstruction.corner_sigma_px = 0;
   EXPECT_EQ(s.check().rfind("pipeline.corner_sigma_px: ", 0), 0u) << s.check();
+  s = defaults;
+  s.threads = 3;
+  EXPECT_EQ(s.check(), "recon.threads: expected 1 or 2, got 3");
 }
 
 TEST(Processor, ReconModeNamesRoundTrip) {

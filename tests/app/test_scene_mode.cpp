@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "../daemon/scene_capture.hpp"
 #include "../support/heap_count.hpp"
@@ -113,6 +114,53 @@ TEST(SceneMode, TheResultJsonCarriesTheSceneObjectOnlyWhenTheSceneRan) {
   EXPECT_FALSE(out.computed);
   EXPECT_TRUE(out.sparse.points.empty());
   EXPECT_FALSE(app::result_to_json(board, out).contains("scene"));
+}
+
+// [recon] threads = 2 moves the dense map to a second thread and changes nothing else: over a
+// sequence (ids followed, buffers reused) both steps give the same points and the same maps, bit for
+// bit, with the board beside them (mode both), mono and Bayer.
+TEST(SceneMode, TheDenseMapOnASecondThreadIsTheSameToTheBit) {
+  for (bool bayer : {false, true}) {
+    app::ProcessorSettings one, two;
+    one.mode = two.mode = app::ReconMode::both;
+    one.threads = 1;
+    two.threads = 2;
+    auto a = app::make_processor(one), b = app::make_processor(two);
+    a->set_rig(scene_rig());
+    b->set_rig(scene_rig());
+    recon::PairResult board_a, board_b;
+    app::SceneResult scene_a, scene_b;
+    recon::scene::DepthMap map_a, map_b;
+    for (int k = 0; k < 3; ++k) {
+      const auto pair = scene_pair(k, bayer);
+      a->process_pair(pair, board_a, scene_a, &map_a);
+      b->process_pair(pair, board_b, scene_b, &map_b);
+      ASSERT_TRUE(scene_a.dense && scene_b.dense);
+      ASSERT_GT(map_a.valid_count, 0);
+      EXPECT_EQ(map_a.valid_count, map_b.valid_count);
+      const auto same = [](const std::vector<float>& x, const std::vector<float>& y) {
+        return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(float)) == 0;
+      };
+      EXPECT_TRUE(same(map_a.z_mm, map_b.z_mm)) << "pair " << k << (bayer ? " Bayer" : " mono");
+      EXPECT_TRUE(same(map_a.sigma_mm, map_b.sigma_mm)) << "pair " << k;
+      EXPECT_TRUE(same(map_a.calib_sigma_mm, map_b.calib_sigma_mm)) << "pair " << k;
+      const auto same_double = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+      EXPECT_EQ(scene_a.depth.valid_count, scene_b.depth.valid_count);
+      EXPECT_TRUE(same_double(scene_a.depth.median_mm, scene_b.depth.median_mm)) << "pair " << k;
+      EXPECT_TRUE(same_double(scene_a.depth.calib_sigma_median_mm, scene_b.depth.calib_sigma_median_mm));
+      ASSERT_EQ(scene_a.sparse.points.size(), scene_b.sparse.points.size());
+      EXPECT_EQ(scene_a.sparse.valid_count, scene_b.sparse.valid_count);
+      for (std::size_t i = 0; i < scene_a.sparse.points.size(); ++i) {
+        const auto &p = scene_a.sparse.points[i], &q = scene_b.sparse.points[i];
+        ASSERT_EQ(p.id, q.id) << "pair " << k << " point " << i;
+        ASSERT_EQ(p.status, q.status);
+        if (p.valid()) {
+          ASSERT_EQ(p.X, q.X);
+        }
+      }
+      EXPECT_EQ(board_a.board_found, board_b.board_found);
+    }
+  }
 }
 
 // Once warm, a pair allocates nothing: the board and sparse halves and the daemon's own glue

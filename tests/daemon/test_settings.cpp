@@ -149,6 +149,11 @@ TEST(Settings, ReconModeIsReadAndValidatedByName) {
             std::string::npos);
   EXPECT_NE(error_of("[recon]\nmode = 1\n").find("recon.mode: expected a string"), std::string::npos);
   EXPECT_NE(error_of("[recon]\nmodes = \"board\"\n").find("recon.modes: unknown key"), std::string::npos);
+  // threads: the dense map on a second thread (2, the default) or on the worker's own (1).
+  EXPECT_EQ(parse_settings("", "/base").processor.threads, 2);
+  EXPECT_EQ(parse_settings("[recon]\nthreads = 1\n", "/base").processor.threads, 1);
+  EXPECT_NE(error_of("[recon]\nthreads = 3\n").find("recon.threads:"), std::string::npos);
+  EXPECT_NE(error_of("[recon]\nthreads = 0\n").find("recon.threads:"), std::string::npos);
 }
 
 TEST(Settings, TheBoardKeysLandInTheReconStructs) {
