@@ -12,7 +12,8 @@
 //    and where the cores' time went (naneyed, the client, other processes: the machine is shared);
 //    steady RSS.
 //
-//   build/bench/bench_daemon [seconds_per_phase=5] [connections=8] [--quick]
+//   build/bench/bench_daemon [seconds_per_phase=5] [connections=8] [--quick] [--scene-only] [--threads N]
+// (--threads: the scene phases' [recon] threads, default the daemon's)
 // More connections than naneyed's http.threads (8) wait for a thread: httplib serves a connection
 // on one pool thread until it closes (after 100 requests or 1 s idle).
 // clang-format off
@@ -131,11 +132,13 @@ std::array<std::uint64_t, kSlots> slot_counts() {
 }
 
 void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool detect,
-                           app::ReconMode mode = app::ReconMode::board, const char* what = nullptr) {
+                           app::ReconMode mode = app::ReconMode::board, const char* what = nullptr,
+                           int threads = app::ProcessorSettings{}.threads) {
   daemon::Settings settings;
   settings.history = 64;
   settings.processor.detect = detect;
   settings.processor.mode = mode;
+  settings.processor.threads = threads;
   auto tagging = std::make_unique<TaggingProcessor>(app::make_processor(settings.processor));
   TaggingProcessor& tag = *tagging;
   daemon::Pipeline pipeline(settings, std::move(tagging), daemon::driver_source_factory(),
@@ -256,11 +259,11 @@ double metric(httplib::Client& c, const std::string& name) {
 
 void service_figures(const std::filesystem::path& dir, const std::filesystem::path& capture, double seconds,
                      int connections, bool detect, app::ReconMode mode = app::ReconMode::board,
-                     const char* what = nullptr) {
+                     const char* what = nullptr, int threads = app::ProcessorSettings{}.threads) {
   const auto log = dir / "naneyed.log";
   const auto config = dir / "naneyed.toml";
   std::ofstream(config) << "[board]\ndetect = " << (detect ? "true" : "false") << "\n[recon]\nmode = \""
-                        << app::to_string(mode) << "\"\n";
+                        << app::to_string(mode) << "\"\nthreads = " << threads << "\n";
   std::printf("-- naneyed, %s\n", what     ? what
                                   : detect ? "board reconstruction (the real processing step)"
                                            : "timing only (board.detect = false)");
@@ -355,12 +358,17 @@ void service_figures(const std::filesystem::path& dir, const std::filesystem::pa
 int main(int argc, char** argv) {
   double seconds = 5.0;
   int connections = 8, rendered = 124;  // 124 poses: 2 s forwards, 2 s back (246 pairs, ~4 s per loop)
-  int positional = 0;
+  int positional = 0, threads = app::ProcessorSettings{}.threads;
+  bool scene_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") {
       seconds = 2.0;
       rendered = 62;
+    } else if (a == "--threads" && i + 1 < argc) {
+      threads = std::atoi(argv[++i]);  // [recon] threads of the scene phases
+    } else if (a == "--scene-only") {
+      scene_only = true;  // the two [recon] mode both phases alone
     } else if (a.rfind("--", 0) == 0) {
       continue;  // scripts/bench.sh's --benchmark_* flags
     } else if (positional++ == 0) {
@@ -381,16 +389,21 @@ int main(int argc, char** argv) {
   std::printf(
       "scene capture: %d pairs of the textured 'sphere' (12-20 mm), hand-held, 62 fps, forwards then back\n",
       scene_pairs);
-  allocations_per_frame(capture, pairs, true);
-  allocations_per_frame(capture, pairs, false);
+  if (!scene_only) {
+    allocations_per_frame(capture, pairs, true);
+    allocations_per_frame(capture, pairs, false);
+  }
   allocations_per_frame(scene_capture, std::min(scene_pairs, 60), true, app::ReconMode::both,
-                        "in-process Pipeline, board + scene:");
-  serialization_cost();
-  service_figures(dir.path, capture, seconds, connections, true);
-  service_figures(dir.path, capture, seconds, connections, false);
+                        "in-process Pipeline, board + scene:", threads);
+  if (!scene_only) {
+    serialization_cost();
+    service_figures(dir.path, capture, seconds, connections, true);
+    service_figures(dir.path, capture, seconds, connections, false);
+  }
+  std::printf("scene phases: [recon] threads = %d\n", threads);
   service_figures(dir.path, scene_capture, seconds, connections, true, app::ReconMode::both,
-                  "board + scene ([recon] mode = \"both\") on the textured sphere");
+                  "board + scene ([recon] mode = \"both\") on the textured sphere", threads);
   service_figures(dir.path, capture, seconds, connections, true, app::ReconMode::both,
-                  "board + scene ([recon] mode = \"both\") on the board capture");
+                  "board + scene ([recon] mode = \"both\") on the board capture", threads);
   return 0;
 }

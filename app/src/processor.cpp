@@ -92,7 +92,10 @@ class Reconstruction final : public PairProcessor {
       map_pixels_ = static_cast<std::size_t>(rig.left.width()) * static_cast<std::size_t>(rig.left.height());
       // The dense map beside the sparse points only when it does not start from their band.
       if (settings_.threads > 1 && !dense_->settings().band_from_sparse && !helper_)
-        helper_.emplace([this] { dense_->reconstruct(sparse_->luma(), *helper_depth_, nullptr); });
+        helper_.emplace([this] {
+          dense_->reconstruct(sparse_->luma(), *helper_depth_, nullptr);
+          if (board_) board_->process(left_, right_, *helper_board_);
+        });
     }
   }
   void process(const driver::StereoPair& pair, recon::PairResult& out) override {
@@ -113,20 +116,23 @@ class Reconstruction final : public PairProcessor {
     // One demosaic and one luminance for both scene paths.
     sparse_->load_luma(left_, right_);
     if (helper_ && depth) {
-      // The dense map on the helper while this thread reads the board and the sparse points: they
-      // share only what both read (the luminance, the frames), and the helper is done before any
-      // of it changes (finish() even when this half throws).
+      // The dense map and the board on the helper while this thread reads the sparse points (the
+      // longer part: balanced so, a pair takes ~the sparse path's time). They share only what all
+      // read (the luminance, the frames), and the helper is done before any of it changes
+      // (finish() even when this half throws).
       helper_depth_ = depth;
+      helper_board_ = &out;
       helper_->start();
       try {
-        board_and_sparse(out, scene);
+        sparse(scene);
       } catch (...) {
         helper_->finish();
         throw;
       }
       helper_->finish();
     } else {
-      board_and_sparse(out, scene);
+      if (board_) board_->process(left_, right_, out);
+      sparse(scene);
       if (depth) dense_->reconstruct(sparse_->luma(), *depth, &scene.sparse);
     }
     if (depth) {
@@ -148,8 +154,7 @@ class Reconstruction final : public PairProcessor {
   std::string_view name() const override { return name_; }
 
  private:
-  void board_and_sparse(recon::PairResult& out, SceneResult& scene) {
-    if (board_) board_->process(left_, right_, out);
+  void sparse(SceneResult& scene) {
     sparse_->reconstruct(sparse_->luma(), scene.sparse);
     scene.computed = true;
   }
@@ -172,7 +177,8 @@ class Reconstruction final : public PairProcessor {
   std::size_t map_pixels_ = 0;  // the left raw grid's, for the dense maps' capacity
   std::optional<FixedPatternStep> fixed_;
   recon::RawImageView left_, right_;
-  recon::scene::DepthMap* helper_depth_ = nullptr;  // the map the helper fills for this pair
+  recon::scene::DepthMap* helper_depth_ = nullptr;  // what the helper fills for this pair
+  recon::PairResult* helper_board_ = nullptr;
   // Last: its destructor waits for the helper before the reconstructors it uses go.
   std::optional<HelperThread> helper_;
 };
