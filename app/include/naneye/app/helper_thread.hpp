@@ -1,9 +1,10 @@
 #pragma once
-// A second thread for one part of the per-pair step ([recon] threads = 2: the dense map beside the
-// board and the sparse points). The worker hands the part over with start() and takes it back with
+// A second thread for one part of the per-pair step ([recon] threads = 2: the dense map and the
+// board beside the sparse points). The worker hands the part over with start() and takes it back with
 // finish(), once per pair: two atomic counters and their futex waits (C++20 std::atomic::wait), no
-// lock, no allocation, no spinning while idle (a spinning pool took the capture and HTTP threads'
-// core: the reason make_processor sets OpenCV to one thread).
+// lock, no allocation, asleep while idle (libstdc++ spins only a few microseconds before the futex;
+// a pool that spins while idle took the capture and HTTP threads' core: the reason make_processor
+// sets OpenCV to one thread).
 #include <atomic>
 #include <cstdint>
 #include <exception>

@@ -33,8 +33,8 @@ struct ProcessorSettings {
   // [recon] mode: board until the scene path fits the 62 fps budget: sparse alone takes 17-31 ms per
   // pair today (docs/scene.md), so "both" would drop every other pair of a live camera.
   ReconMode mode = ReconMode::board;
-  // [recon] threads: 2 computes the scene's dense map on a thread of its own while the worker reads
-  // the board and the sparse points, so a pair takes the longer of the two instead of their sum
+  // [recon] threads: 2 computes the scene's dense map (and the board) on a thread of its own while
+  // the worker reads the sparse points, so a pair takes the longer of the two instead of their sum
   // (docs/scene.md, "Two threads"); 1 keeps the whole step on the worker's core. Scene modes only.
   int threads = 2;
   // [board] rows, cols, square_mm (corners.board),
