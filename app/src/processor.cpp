@@ -115,7 +115,8 @@ class Reconstruction final : public PairProcessor {
     scene.clear();
     // One demosaic and one luminance for both scene paths.
     sparse_->load_luma(left_, right_);
-    if (helper_ && depth) {
+    const bool dense = dense_ && depth;  // dense_: empty only after a set_rig that threw
+    if (helper_ && dense) {
       // The dense map and the board on the helper while this thread reads the sparse points (the
       // longer part: balanced so, a pair takes ~the sparse path's time). They share only what all
       // read (the luminance, the frames), and the helper is done before any of it changes
@@ -126,16 +127,19 @@ class Reconstruction final : public PairProcessor {
       try {
         sparse(scene);
       } catch (...) {
-        helper_->finish();
+        try {
+          helper_->finish();
+        } catch (...) {  // the sparse half's error is the one reported
+        }
         throw;
       }
       helper_->finish();
     } else {
       if (board_) board_->process(left_, right_, out);
       sparse(scene);
-      if (depth) dense_->reconstruct(sparse_->luma(), *depth, &scene.sparse);
+      if (dense) dense_->reconstruct(sparse_->luma(), *depth, &scene.sparse);
     }
-    if (depth) {
+    if (dense) {
       scene.dense = true;
       scene.depth = summarize(*depth);
     }
