@@ -3,9 +3,8 @@
 // (BoardReconstruction: corners, triangulation, board pose, P/D/R) and, as a second row, the
 // timing-only step (board.detect = false), then [recon] mode both (board + sparse + dense scene) on a
 // textured scene (the hand-held sphere, bench/smooth_capture.hpp) and on the board capture:
-//  - allocations per frame on the reconstruction worker and on the other threads (capture, the scene's
-//  helper; in-process
-//    Pipeline, max-speed replay; every operator new counted per thread);
+//  - allocations per frame on the reconstruction worker and on the other threads (capture, the
+//    scene's helper; in-process Pipeline, max-speed replay; every operator new counted per thread);
 //  - naneyed itself: capture-to-published latency p50/p99; requests/s on /v1/depth while streaming,
 //    from keep-alive connections driven by one epoll thread (bench/http_load.hpp: it costs far less
 //    per request than the server, unlike httplib's client), counted by the client and by naneyed
@@ -171,8 +170,7 @@ void allocations_per_frame(const std::filesystem::path& capture, int pairs, bool
   }
   std::printf(
       "%-40s allocations per frame: recon worker %.2f, capture and helper threads %.2f (%.0f pairs after "
-      "%llu warm-up, "
-      "%d with a board, %.0f valid scene points per pair); max-speed replay %.0f pairs/s\n",
+      "%llu warm-up, %d with a board, %.0f valid scene points per pair); max-speed replay %.0f pairs/s\n",
       what     ? what
       : detect ? "in-process Pipeline, BoardReconstruction:"
                : "in-process Pipeline, timing only:",
