@@ -18,9 +18,11 @@ using namespace naneye::daemon::test;
 
 namespace {
 
-std::unique_ptr<app::PairProcessor> processor(app::ReconMode mode) {
+std::unique_ptr<app::PairProcessor> processor(app::ReconMode mode,
+                                              int threads = app::ProcessorSettings{}.threads) {
   app::ProcessorSettings s;
   s.mode = mode;
+  s.threads = threads;
   auto p = app::make_processor(s);
   p->set_rig(scene_rig());
   return p;
@@ -183,14 +185,7 @@ Compared expect_same_results(const driver::StereoPair& pair, app::PairProcessor&
 // the same points, maps and boards, bit for bit (mode both), on a textured scene in mono and Bayer
 // and on the bundled board capture.
 TEST(SceneMode, TheDenseMapAndTheBoardOnASecondThreadAreTheSameToTheBit) {
-  const auto make = [](int threads) {
-    app::ProcessorSettings s;
-    s.mode = app::ReconMode::both;
-    s.threads = threads;
-    auto p = app::make_processor(s);
-    p->set_rig(scene_rig());
-    return p;
-  };
+  const auto make = [](int threads) { return processor(app::ReconMode::both, threads); };
   for (bool bayer : {false, true}) {
     const int before = thread_count();
     auto one = make(1);
